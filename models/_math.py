@@ -1,0 +1,48 @@
+"""Private numerical helpers: NaN-safe powers, roots and branches.
+
+Every physics module imports these instead of writing its own guards. The idiom
+is the double ``where``: the unsafe branch is fed a harmless dummy argument, so
+both the value *and* the gradient stay finite where the branch is not taken.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from jax.typing import ArrayLike
+
+__all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu"]
+
+
+def safe_sqrt(x: ArrayLike) -> jnp.ndarray:
+    """sqrt(x) for x > 0, 0 for x <= 0, with a zero (not NaN/inf) gradient at x <= 0."""
+    x = jnp.asarray(x)
+    pos = x > 0
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
+
+
+def safe_pow(x: ArrayLike, p: ArrayLike) -> jnp.ndarray:
+    """x**p for x > 0, 0 for x <= 0 (the unilateral-contact clip), NaN-free gradients.
+
+    The gradient at x = 0 with p < 1 diverges in truth; here it is reported as 0,
+    the one-sided value from the open (x < 0) side. Callers that need the true
+    behaviour at the contact edge must not rely on it.
+    """
+    x = jnp.asarray(x)
+    pos = x > 0
+    return jnp.where(pos, jnp.power(jnp.where(pos, x, 1.0), p), 0.0)
+
+
+pos_pow = safe_pow
+
+
+def safe_log(x: ArrayLike, tiny: float = 1e-300) -> jnp.ndarray:
+    """log(max(x, tiny)) with a finite gradient everywhere."""
+    x = jnp.asarray(x)
+    ok = x > tiny
+    return jnp.where(ok, jnp.log(jnp.where(ok, x, 1.0)), jnp.log(tiny))
+
+
+def smooth_relu(x: ArrayLike, width: ArrayLike) -> jnp.ndarray:
+    """Softplus of width ``width``: a C-infinity stand-in for max(x, 0)."""
+    x = jnp.asarray(x)
+    return width * jnp.logaddexp(0.0, x / width)

@@ -1,0 +1,1 @@
+"""beadrod workflows."""

@@ -1,0 +1,58 @@
+"""The ``beadrod`` command line.
+
+Each subcommand lives in its own ``workflows/cmd_*.py`` module exposing
+``register(subparsers)``; :data:`COMMAND_MODULES` is the one list of them.
+Float64 is switched on here, at the entry point, never on import of ``models``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+__all__ = ["main", "build_parser", "COMMAND_MODULES"]
+
+COMMAND_MODULES: tuple[str, ...] = (
+    "workflows.cmd_scene",
+)
+
+
+def _enable_x64() -> None:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="beadrod",
+        description="Bayesian model comparison and parameter inference for a bead resting "
+        "on a rod: contact laws, their resonance-frequency shift, and the data.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    _enable_x64()
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("beadrod: interrupted", file=sys.stderr)
+        return 130
+    except UserError as exc:
+        print(f"beadrod: error: {exc}", file=sys.stderr)
+        return 2
+
+
+class UserError(Exception):
+    """An error the user can act on (bad data, bad config, refused overwrite)."""
+
+
+if __name__ == "__main__":
+    sys.exit(main())
