@@ -1,1 +1,35 @@
-"""beadrod data."""
+"""beadrod data: dataset format and validation, protocol processing, resonance
+extraction, and the synthetic worlds shipped as the embedded datasets."""
+
+from .extract import CurveFit, extract_resonance, read_curve
+from .load import Dataset, load_dataset, write_dataset
+from .process import (
+    ProcessedDataset,
+    default_path,
+    load_default,
+    overlap_from_f0,
+    process,
+    static_overlap_weight,
+)
+from .schema import DataError
+from .synth import DEFAULT_SEED, generate, world_names, write_world
+
+__all__ = [
+    "CurveFit",
+    "DEFAULT_SEED",
+    "DataError",
+    "Dataset",
+    "ProcessedDataset",
+    "default_path",
+    "extract_resonance",
+    "generate",
+    "load_dataset",
+    "load_default",
+    "overlap_from_f0",
+    "process",
+    "read_curve",
+    "static_overlap_weight",
+    "world_names",
+    "write_dataset",
+    "write_world",
+]

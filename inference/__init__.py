@@ -1,1 +1,36 @@
-"""beadrod inference."""
+"""beadrod inference: NumPyro models per contact law, NUTS, evidence, diagnostics,
+model comparison, the Q-versus-shift tension and simulation-based calibration.
+
+Entry points call :func:`inference.sample.configure` before JAX initialises (host
+devices for parallel chains, float64). Importing this package does not import jaxns.
+"""
+
+from .compare import DataHashMismatch, evidence_table, log_bayes_factor, loo_table
+from .diagnostics import DiagnosticsFailed, Verdict, check, loo_report
+from .evidence import (
+    EvidenceResult,
+    combined_agreement,
+    linear_gaussian_log_evidence,
+    nested_sampling_log_z,
+    smc_log_z,
+)
+from .likelihood import design_inputs, model_inputs, simulate, without_observations
+from .numpyro_models import (
+    LAWS,
+    RUNGS,
+    ForwardModelUnavailable,
+    ModelSpec,
+    build_model,
+    paper_spec,
+)
+from .sample import FitResult, configure, load_idata, run_nuts, save_idata
+
+__all__ = [
+    "LAWS", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",
+    "model_inputs", "design_inputs", "simulate", "without_observations",
+    "configure", "run_nuts", "FitResult", "save_idata", "load_idata",
+    "check", "Verdict", "DiagnosticsFailed", "loo_report",
+    "EvidenceResult", "nested_sampling_log_z", "smc_log_z", "combined_agreement",
+    "linear_gaussian_log_evidence",
+    "loo_table", "evidence_table", "log_bayes_factor", "DataHashMismatch",
+]

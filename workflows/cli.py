@@ -14,7 +14,13 @@ import sys
 __all__ = ["main", "build_parser", "COMMAND_MODULES"]
 
 COMMAND_MODULES: tuple[str, ...] = (
+    "workflows.cmd_compare",
     "workflows.cmd_scene",
+    "workflows.cmd_shift",
+    "workflows.cmd_plan",
+    "workflows.cmd_simulate",
+    "workflows.cmd_validate",
+    "workflows.cmd_bench",
 )
 
 

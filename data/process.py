@@ -1,0 +1,215 @@
+"""The paper's measurement protocol, applied to a validated dataset.
+
+Per protocol (Merkel et al. 2019, Sec. 2 and Fig. 1(d)):
+
+* the first reference (low-amplitude) sweep gives the linear resonance f0 and
+  Q_ref; later reference sweeps give f0(n), the monitored linear resonance;
+* once |f0(n) - f0| / f0 > 2 %, every later drive step of the protocol is
+  excluded (recorded with its reason; ``two_percent_rule=False`` keeps them);
+* each drive sweep gives Delta f / f0 = f_res / f_ref - 1 with f_ref the
+  protocol's first reference (the paper) or the preceding reference (option);
+* Delta(1/Q) = (1/Q_ref) (V delta_ref / (V_ref delta) - 1)   (paper Eq. 31),
+  with V the drive voltage and delta the amplitude at resonance, against the
+  first reference. For a linear response delta is proportional to Q V, so
+  Eq. 31 reads 1/Q - 1/Q_ref.
+
+Where a reference step holds both sweep directions their values are averaged.
+The amplitude axis delta_a/delta0 takes delta0 from the Hertz law under the
+scene's load (the paper's convention) or from each protocol's measured f0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+
+from .load import Dataset, load_dataset
+
+__all__ = [
+    "ProcessedDataset",
+    "process",
+    "load_default",
+    "default_path",
+    "static_overlap_weight",
+    "overlap_from_f0",
+    "TWO_PERCENT",
+]
+
+TWO_PERCENT = 0.02
+"""The paper's threshold on |f0(n) - f0| / f0 beyond which later drive steps are dropped."""
+
+
+def static_overlap_weight(scene: Any) -> float:
+    """delta0 [m] from the Hertz law under the scene's load (models.hertz.static_overlap)."""
+    from models import hertz
+
+    return float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
+                                      radius=float(scene.radius)))
+
+
+def overlap_from_f0(f0: np.ndarray, scene: Any) -> np.ndarray:
+    """delta0 [m] implied by measured linear resonances f0 [Hz] under the scene's load
+    (models.hertz.overlap_from_frequency: 3 F0 / (2 m omega0^2))."""
+    from models import hertz
+
+    return np.asarray(hertz.overlap_from_frequency(np.asarray(f0, np.float64), float(scene.load),
+                                                   float(scene.mass)), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class ProcessedDataset:
+    """Typed arrays for inference: P protocols, N included drive sweeps (SI units).
+
+    ``drive_direction``: 0 = up, 1 = down. ``q_ref`` is NaN where the first
+    reference has no Q, and so is ``drive_inv_q_shift`` for its protocol.
+    ``excluded`` lists the excluded drive rows with a ``reason``; ``references``
+    every reference step with f0(n) and its relative drift from f0.
+    """
+
+    protocol_ids: tuple[str, ...]
+    n_protocols: int
+    f0: np.ndarray
+    q_ref: np.ndarray
+    ref_amplitude: np.ndarray
+    ref_voltage: np.ndarray
+    drive_protocol: np.ndarray
+    drive_step: np.ndarray
+    drive_direction: np.ndarray
+    drive_voltage: np.ndarray
+    drive_amplitude: np.ndarray
+    drive_f_res: np.ndarray
+    drive_shift: np.ndarray
+    drive_inv_q_shift: np.ndarray
+    excluded: pd.DataFrame
+    scene: Any
+    data_hash: str
+    source: str
+    references: pd.DataFrame = field(default_factory=pd.DataFrame)
+    options: dict = field(default_factory=dict)
+
+    @property
+    def n_drive(self) -> int:
+        return int(self.drive_shift.shape[0])
+
+    def delta0(self, convention: Literal["weight", "f0"] = "weight") -> np.ndarray:
+        """Static overlap per protocol (P,) [m]: Hertz under the load, or from f0."""
+        if convention == "weight":
+            return np.full(self.n_protocols, static_overlap_weight(self.scene))
+        if convention == "f0":
+            return overlap_from_f0(self.f0, self.scene)
+        raise ValueError(f"convention must be 'weight' or 'f0', got {convention!r}")
+
+    def normalized_amplitude(self, convention: Literal["weight", "f0"] = "weight") -> np.ndarray:
+        """delta_a / delta0 for each included drive sweep (N,)."""
+        return self.drive_amplitude / self.delta0(convention)[self.drive_protocol]
+
+
+def _ref_steps(step: np.ndarray, cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per reference step (``step`` sorted), directions averaged; Q NaN-aware."""
+    steps, start = np.unique(step, return_index=True)
+    out = {"step": steps}
+    for name, v in cols.items():
+        if name == "row":
+            out[name] = v[start]
+            continue
+        finite = ~np.isnan(v)
+        total = np.add.reduceat(np.where(finite, v, 0.0), start)
+        n = np.add.reduceat(finite.astype(np.float64), start)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[name] = np.where(n > 0, total / np.maximum(n, 1), np.nan)
+    return out
+
+
+def process(
+    dataset: Dataset,
+    *,
+    two_percent_rule: bool = True,
+    shift_reference: Literal["first", "preceding"] = "first",
+    threshold: float = TWO_PERCENT,
+) -> ProcessedDataset:
+    """Apply the protocol logic to a loaded :class:`~data.load.Dataset`.
+
+    The dataset's table is sorted by (protocol, step, direction), so each protocol
+    is a contiguous block and is handled with numpy slices.
+    """
+    if shift_reference not in ("first", "preceding"):
+        raise ValueError(f"shift_reference must be 'first' or 'preceding', got {shift_reference!r}")
+    t = dataset.table
+    prot = t["protocol"].to_numpy()
+    pids, starts = np.unique(prot, return_index=True)
+    order = np.argsort(starts)
+    pids, starts = tuple(str(x) for x in pids[order]), starts[order]
+    ends = np.append(starts[1:], len(t))
+    step = t["step"].to_numpy(np.int64)
+    is_ref = (t["kind"] == "reference").to_numpy()
+    num = {c: t[c].to_numpy(np.float64) for c in
+           ("f_res_Hz", "amplitude_m", "drive_voltage_V", "q_factor")}
+    num["row"] = t["row"].to_numpy(np.int64)
+    P = len(pids)
+    f0, q_ref, a_ref, v_ref = (np.empty(P) for _ in range(4))
+    keep = np.zeros(len(t), dtype=bool)
+    p_of = np.full(len(t), -1, dtype=np.int64)
+    f_ref_of = np.full(len(t), np.nan)
+    reasons: dict[int, str] = {}
+    ref_parts = []
+    for p, (i0, i1) in enumerate(zip(starts, ends)):
+        sl = slice(i0, i1)
+        rmask = is_ref[sl]
+        r = _ref_steps(step[sl][rmask], {k: v[sl][rmask] for k, v in num.items()})
+        f0[p], q_ref[p] = r["f_res_Hz"][0], r["q_factor"][0]
+        a_ref[p], v_ref[p] = r["amplitude_m"][0], r["drive_voltage_V"][0]
+        drift = r["f_res_Hz"] / f0[p] - 1.0
+        ref_parts.append(pd.DataFrame({
+            "protocol": pids[p], "step": r["step"], "row": r["row"], "f0_n_Hz": r["f_res_Hz"],
+            "drift": drift, "q_factor": r["q_factor"]}))
+        d_idx = np.arange(i0, i1)[~rmask]
+        dstep = step[d_idx]
+        p_of[d_idx] = p
+        # the reference in force for each drive step: the last one before it
+        prev = np.searchsorted(r["step"], dstep) - 1
+        f_ref_of[d_idx] = r["f_res_Hz"][prev] if shift_reference == "preceding" else f0[p]
+        ok = np.ones(d_idx.size, dtype=bool)
+        trips = np.flatnonzero(np.abs(drift) > threshold)
+        if two_percent_rule and trips.size:
+            s = int(trips[0])
+            ok = dstep <= r["step"][s]
+            reason = (f"2 % rule: reference step {int(r['step'][s])} (row {int(r['row'][s])}) "
+                      f"has f0(n) = {r['f_res_Hz'][s]:.2f} Hz, |f0(n) - f0|/f0 = "
+                      f"{abs(drift[s]):.2%} > {threshold:.0%} (f0 = {f0[p]:.2f} Hz)")
+            reasons.update({int(i): reason for i in d_idx[~ok]})
+        keep[d_idx[ok]] = True
+    idx = np.flatnonzero(keep)
+    p_idx = p_of[idx]
+    volt, amp, fres = (num[c][idx] for c in ("drive_voltage_V", "amplitude_m", "f_res_Hz"))
+    shift = fres / f_ref_of[idx] - 1.0
+    # paper Eq. 31 against the protocol's first reference
+    inv_q = (volt * a_ref[p_idx] / (v_ref[p_idx] * amp) - 1.0) / q_ref[p_idx]
+    ex_idx = np.array(sorted(reasons), dtype=np.int64)
+    excluded = t.iloc[ex_idx].reset_index(drop=True).assign(
+        reason=pd.Series([reasons[int(i)] for i in ex_idx], dtype=object))
+    return ProcessedDataset(
+        protocol_ids=pids, n_protocols=P, f0=f0, q_ref=q_ref,
+        ref_amplitude=a_ref, ref_voltage=v_ref,
+        drive_protocol=p_idx, drive_step=step[idx],
+        drive_direction=(t["direction"].to_numpy()[idx] == "down").astype(np.int64),
+        drive_voltage=volt, drive_amplitude=amp, drive_f_res=fres,
+        drive_shift=shift, drive_inv_q_shift=inv_q, excluded=excluded,
+        scene=dataset.scene, data_hash=dataset.data_hash, source=str(dataset.path),
+        references=pd.concat(ref_parts, ignore_index=True),
+        options={"two_percent_rule": two_percent_rule, "shift_reference": shift_reference,
+                 "threshold": threshold},
+    )
+
+
+def default_path() -> Path:
+    """Folder of the embedded default dataset (the ``paper_like`` synthetic world)."""
+    return Path(__file__).resolve().parent / "paper_like"
+
+
+def load_default(**options: Any) -> ProcessedDataset:
+    """Load and process the embedded ``paper_like`` world (keyword options go to process)."""
+    return process(load_dataset(default_path()), **options)

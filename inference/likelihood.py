@@ -1,0 +1,145 @@
+"""Observation models shared by the contact-law models, and the data they consume.
+
+``model_inputs(ds)`` turns a ProcessedDataset (or any object with the same fields)
+into the dict of arrays every model takes; observations live under ``f0``, ``shift``
+and ``q_obs`` and are set to None by :func:`without_observations` for prior predictive
+simulation. Q is observed only where the protocol has one (NaN rows are dropped
+here, once, so shapes stay static under jit).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+import numpyro
+import numpyro.distributions as dist
+
+__all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
+           "design_inputs", "simulate",
+           "OBSERVED_SITES"]
+
+OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs")
+
+
+def model_inputs(ds: Any) -> dict[str, Any]:
+    """Arrays (float64) a model needs from a processed dataset.
+
+    Needs ``f0``, ``q_ref``, ``drive_protocol``, ``drive_direction``, ``drive_amplitude``,
+    ``drive_shift`` and a ``scene`` with ``mass``, ``load``, ``radius``, ``bead_material``,
+    ``rod_material`` (Poisson ratios; E is inferred and taken equal for bead and rod).
+    """
+    f0 = np.asarray(ds.f0, float)
+    q_ref = np.asarray(ds.q_ref, float)
+    q_idx = np.flatnonzero(np.isfinite(q_ref))
+    amp = np.asarray(ds.drive_amplitude, float)
+    shift = np.asarray(ds.drive_shift, float)
+    if not (np.all(np.isfinite(amp)) and np.all(amp > 0)):
+        raise ValueError("drive_amplitude must be finite and > 0 for every included sweep")
+    if not np.all(np.isfinite(shift)):
+        raise ValueError("drive_shift must be finite for every included sweep")
+    if not np.all(np.isfinite(f0)):
+        raise ValueError("f0 must be finite for every protocol")
+    sc = ds.scene
+    return {
+        "f0": jnp.asarray(f0),
+        "q_idx": jnp.asarray(q_idx, dtype=jnp.int32),
+        "q_obs": jnp.asarray(q_ref[q_idx]),
+        "proto": jnp.asarray(np.asarray(ds.drive_protocol), dtype=jnp.int32),
+        "direction": jnp.asarray(np.asarray(ds.drive_direction), dtype=jnp.float64),
+        "amplitude": jnp.asarray(amp),
+        "shift": jnp.asarray(shift),
+        "mass": float(sc.mass),
+        "load": float(sc.load),
+        "radius": float(sc.radius),
+        "nu_bead": float(sc.bead_material.poisson),
+        "nu_rod": float(sc.rod_material.poisson),
+    }
+
+
+def without_observations(inputs: dict[str, Any]) -> dict[str, Any]:
+    """Copy of ``inputs`` with the observed values removed (prior predictive)."""
+    out = dict(inputs)
+    if inputs.get("f0") is not None:
+        out["n_protocols"] = int(inputs["f0"].shape[0])
+    for k in ("f0", "shift", "q_obs"):
+        out[k] = None
+    return out
+
+
+def observe_shift(pred: jnp.ndarray, sigma: jnp.ndarray, obs: jnp.ndarray | None, *,
+                  likelihood: str, df: float) -> jnp.ndarray:
+    """Delta f/f0 ~ Normal(pred, sigma) or StudentT(df, pred, sigma) (robust option)."""
+    if likelihood == "normal":
+        d = dist.Normal(pred, sigma)
+    elif likelihood == "student_t":
+        d = dist.StudentT(df, pred, sigma)
+    else:
+        raise ValueError(f"likelihood must be 'normal' or 'student_t', got {likelihood!r}")
+    with numpyro.plate("sweeps", pred.shape[0]):
+        return numpyro.sample("shift_obs", d, obs=obs)
+
+
+def observe_logq(log_q_pred: jnp.ndarray, sigma: jnp.ndarray, obs: jnp.ndarray | None, *,
+                 likelihood: str, df: float) -> jnp.ndarray:
+    """Q ~ LogNormal(log Q_pred, sigma) (Q is positive and scatters multiplicatively).
+
+    The Student-t option puts the t on log Q (a log-t), exp-transformed.
+    """
+    if likelihood == "normal":
+        d = dist.LogNormal(log_q_pred, sigma)
+    else:
+        d = dist.TransformedDistribution(dist.StudentT(df, log_q_pred, sigma),
+                                         dist.transforms.ExpTransform())
+    with numpyro.plate("q_protocols", log_q_pred.shape[0]):
+        return numpyro.sample("q_obs", d, obs=obs)
+
+
+def design_inputs(scene: Any, *, n_protocols: int, amplitudes: Any,
+                  directions: tuple[int, ...] = (0, 1), q_every: int = 1) -> dict[str, Any]:
+    """An experiment design without observations: every protocol is swept at the
+    drive amplitudes ``amplitudes`` [m] in each of ``directions``; Q is observed on
+    every ``q_every``-th protocol. Fill the observations with :func:`simulate`.
+    """
+    amps = np.asarray(amplitudes, float)
+    proto, direc, amp = [], [], []
+    for p in range(n_protocols):
+        for d in directions:
+            proto += [p] * len(amps)
+            direc += [d] * len(amps)
+            amp += list(amps)
+    q_idx = np.arange(0, n_protocols, q_every)
+    return {
+        "f0": None, "q_obs": None, "shift": None, "n_protocols": int(n_protocols),
+        "q_idx": jnp.asarray(q_idx, dtype=jnp.int32),
+        "proto": jnp.asarray(proto, dtype=jnp.int32),
+        "direction": jnp.asarray(direc, dtype=jnp.float64),
+        "amplitude": jnp.asarray(amp),
+        "mass": float(scene.mass), "load": float(scene.load), "radius": float(scene.radius),
+        "nu_bead": float(scene.bead_material.poisson),
+        "nu_rod": float(scene.rod_material.poisson),
+    }
+
+
+def simulate(model: Any, design: dict[str, Any], truth: dict[str, Any],
+             seed: int = 0) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Observations drawn from ``model`` with its latent sites fixed at ``truth``
+    (sites not in ``truth`` are drawn from their priors); returns the model inputs
+    with ``f0``, ``shift`` and ``q_obs`` filled, and the values of every sample and
+    deterministic site of the simulating trace (the truth, delta0 included).
+    """
+    import jax
+    from numpyro import handlers
+
+    cond = handlers.condition(model, data={k: jnp.asarray(v) for k, v in truth.items()})
+    tr = handlers.trace(handlers.seed(cond, jax.random.PRNGKey(seed))).get_trace(design)
+    out = dict(design)
+    out.pop("n_protocols", None)
+    out["f0"] = tr["f0_obs"]["value"]
+    if "shift_obs" in tr:
+        out["shift"] = tr["shift_obs"]["value"]
+    if "q_obs" in tr:
+        out["q_obs"] = tr["q_obs"]["value"]
+    values = {k: s["value"] for k, s in tr.items() if s["type"] in ("sample", "deterministic")}
+    return out, values

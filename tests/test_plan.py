@@ -1,0 +1,162 @@
+"""Scene plans: every built-in scene gives a valid plan, the plans differ as designed, and the
+bound derivations agree with independent references (2-DOF eigenvalues, Lindstedt-Poincare,
+exact linear resonance peaks)."""
+
+import argparse
+import json
+import math
+
+import numpy as np
+import pytest
+
+from models import plan as planmod
+from models import scenes
+from models.plan import EFFECT_NAMES, RUNGS, plan_scene
+
+
+@pytest.fixture(scope="module")
+def plans():
+    return {n: plan_scene(scenes.builtin_scene(n)) for n in scenes.builtin_scene_names()}
+
+
+def test_every_builtin_plan_is_valid(plans):
+    assert len(plans) >= 4
+    for name, p in plans.items():
+        assert p.rung in RUNGS
+        assert p.harmonics >= 1
+        assert [e.name for e in p.effects] == list(EFFECT_NAMES)
+        for e in p.effects:
+            assert isinstance(e.included, bool) and e.reason
+            assert e.error_bound >= 0
+            assert p.included(e.name) is e.included
+            if not e.included:
+                # left out only when its bound is finite and within the tolerance
+                assert math.isfinite(e.error_bound), (name, e.name)
+                assert e.error_bound <= p.tolerance, (name, e.name)
+            elif e.name not in ("contact_loss", "plasticity"):
+                assert e.error_bound > p.tolerance, (name, e.name)
+        json.dumps(p.to_dict(), allow_nan=False)
+        with pytest.raises(KeyError):
+            p.included("gravity waves")
+
+
+def test_plans_differ_as_designed(plans):
+    paper, strong = plans["paper"], plans["strong_drive"]
+    soft, micro = plans["large_soft_bead"], plans["micro_bead"]
+    # paper: JKR by the adhesion map (mu ~ 59, adhesion/load 0.22), no contact loss,
+    # bistable sweeps (Q = 20), forced response by harmonic balance
+    assert paper.contact_law == "JKR" and paper.included("adhesion")
+    assert not paper.included("contact_loss") and paper.included("jumps")
+    assert paper.rung == "harmonic-balance"
+    assert not paper.included("rod_waveguide") and not paper.included("rod_dispersion")
+    # strong drive: the bead bounces -> time integration
+    assert strong.included("contact_loss") and strong.rung == "time-integration"
+    assert strong.numbers["x_max"] > 4
+    # large soft bead: Hertz, the rod strongly coupled -> waveguide
+    assert soft.contact_law == "Hertz" and not soft.included("adhesion")
+    assert soft.included("rod") and soft.included("rod_waveguide")
+    assert soft.effect("rod").details["k0_cb"] > 1 / 3
+    # micro bead: adhesion dominates, Maugis-Dugdale transition, rod rigid, tiny amplitude
+    assert micro.contact_law == "Maugis-Dugdale" and micro.included("adhesion")
+    assert micro.effect("adhesion").value > 1e4
+    assert not micro.included("rod") and micro.rung == "small-amplitude-series"
+    assert len({p.rung for p in plans.values()}) >= 3
+    assert len({tuple(e.included for e in p.effects) for p in plans.values()}) == 4
+
+
+def test_amplitude_override_and_tolerance_monotone():
+    s = scenes.builtin_scene("paper")
+    p = plan_scene(s)
+    d0 = p.numbers["delta0_m"]
+    big = plan_scene(s, amplitude_max=1.5 * d0)
+    assert big.included("contact_loss") and big.rung == "time-integration"
+    loose = plan_scene(s, tolerance=0.1)
+    assert {e.name for e in loose.effects if e.included} < \
+        {e.name for e in p.effects if e.included}
+
+
+def test_rod_mass_loading_against_two_dof_eigenvalues():
+    """Bead m on contact K0 on a rod mode (M, K_r): the exact lower eigenfrequency of the
+    2-DOF system is lowered by K0 c_b / 2 to first order (the plan's f0 error)."""
+    p = plan_scene(scenes.builtin_scene("paper"))
+    rod = p.effect("rod").details
+    m, k0 = p.numbers["mass_kg"], p.numbers["K0_N_m"]
+    big_m, kr = rod["modal_mass_kg"], rod["modal_mass_kg"] * (2 * math.pi * rod["f_rod_Hz"]) ** 2
+    stiff = np.array([[k0, -k0], [-k0, k0 + kr]])
+    mass = np.diag([m, big_m])
+    w2 = np.sort(np.linalg.eigvals(np.linalg.solve(mass, stiff)).real)
+    rel = math.sqrt(w2[0] * m / k0) - 1
+    assert rel < 0
+    assert -rel == pytest.approx(rod["f0_relative_error"], rel=0.1)
+
+
+def _quadratic_law(alpha, k0=1.0, d0=1.0, f0=1.0):
+    def force(d):
+        q = np.asarray(d) / d0 - 1
+        return f0 + k0 * d0 * (q + alpha * q * q)
+    return {"force": force, "k0": k0, "delta0": d0}
+
+
+@pytest.mark.parametrize("alpha,x", [(0.25, 0.2), (0.5, 0.4), (1.0, 0.1)])
+def test_harmonic_bound_matches_lindstedt_quadratic(alpha, x):
+    """q'' + q + alpha q^2 = 0: omega = 1 - (5/12)(alpha x)^2, of which the second harmonic
+    carries +(1/12)(alpha x)^2 (Nayfeh & Mook Sec. 4.1); the plan's B(1) is twice it."""
+    e, h = planmod._effect_harmonics(_quadratic_law(alpha), x, tol=1e-30)
+    assert e.value / 2 == pytest.approx((alpha * x) ** 2 / 12, rel=1e-10)
+    assert h == 2 and e.details["bound_at_H"] < 1e-25
+
+
+@pytest.mark.parametrize("alpha,x", [(0.25, 0.3), (0.5, 0.2)])
+def test_contact_loss_margin_matches_lindstedt_quadratic(alpha, x):
+    """Lindstedt orbit q = x sin t - alpha x^2/2 + (alpha x^2/6) cos 2t: min = -x - alpha x^2/3."""
+    e = planmod._effect_contact_loss(_quadratic_law(alpha), 1.0, x)
+    assert e.threshold == pytest.approx(1 - alpha * x**2 / 3, rel=1e-12)
+    assert e.details["mean_shift"] == pytest.approx(-alpha * x**2 / 2, rel=1e-12)
+
+
+@pytest.mark.parametrize("q", [2.0, 5.0, 20.0, 100.0])
+def test_viscous_bound_covers_exact_linear_peaks(q):
+    zeta = 1 / (2 * q)
+    r = np.linspace(0.5, 1.5, 400001)
+    force_drive = 1 / np.sqrt((1 - r**2) ** 2 + (2 * zeta * r) ** 2)
+    base_drive = np.sqrt(1 + (2 * zeta * r) ** 2) * force_drive
+    bound = planmod._effect_viscous(q, q, 5e-3).error_bound
+    for resp in (force_drive, base_drive):
+        assert abs(r[np.argmax(resp)] - 1) <= bound
+    assert abs(r[np.argmax(force_drive)] - 1) > bound / 4  # and not vacuous
+
+
+def test_plan_command_json(capsys):
+    from workflows import cmd_plan
+
+    parser = argparse.ArgumentParser()
+    cmd_plan.register(parser.add_subparsers())
+    args = parser.parse_args(["plan", "--builtin", "strong_drive", "--json"])
+    assert args.func(args) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["rung"] == "time-integration"
+    assert {e["name"] for e in d["effects"]} == set(EFFECT_NAMES)
+    args = parser.parse_args(["plan", "--builtin", "paper"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "contact_loss" in out and "harmonic-balance" in out
+
+
+@pytest.mark.slow
+def test_rung_error_estimates_cover_exact_backbone():
+    """Against engineer D's exact Hertz backbone (energy integral): the plan's |S|max
+    estimate and its series / first-order error estimates are upper bounds for x <= 0.9."""
+    import jax.numpy as jnp
+
+    from models.backbone import backbone_shift, lindstedt_shift
+    from models.shift import first_order_hertz
+
+    xs = np.array([0.1, 0.3, 0.6, 0.9])
+    exact = np.asarray(backbone_shift(jnp.asarray(xs), 1.5))
+    for x, s in zip(xs, exact):
+        assert planmod._shift_estimate(float(x)) >= abs(s)
+        s_lin = float(lindstedt_shift(x, 1.5))
+        err_series = abs(s_lin) * x**2
+        err_first = abs(float(first_order_hertz(x)) - s_lin) + err_series
+        assert abs(s_lin - s) <= err_series
+        assert abs(float(first_order_hertz(x)) - s) <= err_first

@@ -1,0 +1,154 @@
+"""Scenes: TOML loading, validation messages, derived properties, the `scene` command."""
+
+import argparse
+import json
+import math
+
+import pytest
+
+from models import scenes
+from models.scenes import SceneError
+
+PAPER_R, PAPER_RHO, G = 7.938e-3, 7700.0, 9.80665
+
+
+def _toml(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+BASE = """
+name = "t"
+[materials.steel]
+young_Pa = 200e9
+poisson = 0.27
+density_kg_m3 = 7700
+[bead]
+radius_m = 7.938e-3
+material = "steel"
+[rod]
+diameter_m = 0.012
+length_m = 0.1
+material = "steel"
+[surfaces]
+roughness_rms_m = 25e-9
+surface_energy_J_m2 = 0.7
+[drive]
+f_min_Hz = 1500
+f_max_Hz = 3500
+voltage_min_V = 0.01
+voltage_max_V = 1
+displacement_per_volt_m_V = 1e-9
+"""
+
+
+def test_builtins_exist_and_round_trip():
+    names = scenes.builtin_scene_names()
+    assert {"paper", "strong_drive", "large_soft_bead", "micro_bead"} <= set(names)
+    for n in names:
+        s = scenes.builtin_scene(n)
+        assert s.name == n
+        assert scenes.scene_from_dict(scenes.scene_to_dict(s), n) == s
+
+
+def test_paper_derived_properties_closed_form():
+    s = scenes.builtin_scene("paper")
+    m = 4 / 3 * math.pi * PAPER_R**3 * PAPER_RHO
+    assert s.mass == pytest.approx(m, rel=1e-14)
+    assert s.weight == pytest.approx(m * G, rel=1e-14)
+    assert s.load == s.weight
+    assert s.e_star == pytest.approx(200e9 / (2 * (1 - 0.27**2)), rel=1e-14)
+    assert s.radius == PAPER_R and s.rod_radius == 6e-3
+    assert s.young_range == (190e9, 210e9)
+    assert s.young_values() == (190e9, 210e9)
+    s190 = s.with_young(190e9)
+    assert s190.bead_material.young == s190.rod_material.young == 190e9
+    assert s190.e_star == pytest.approx(190e9 / (2 * (1 - 0.27**2)), rel=1e-14)
+    # displacement_per_volt documented choice: Q U_max ~ delta0 (53 nm) at the top drive
+    assert s.quality_factor * s.drive_displacement_max == pytest.approx(54e-9)
+
+
+def test_two_materials_and_extra_force(tmp_path):
+    text = BASE.replace('material = "steel"\n[surfaces]', 'material = "pmma"\n[surfaces]')
+    text += ("[materials.pmma]\nyoung_Pa = 3.3e9\npoisson = 0.37\ndensity_kg_m3 = 1190\n"
+             "[preload]\nextra_force_N = 0.5\n")
+    s = scenes.load_scene(_toml(tmp_path, text))
+    es = 1 / ((1 - 0.27**2) / 200e9 + (1 - 0.37**2) / 3.3e9)
+    assert s.e_star == pytest.approx(es, rel=1e-14)
+    assert s.load == pytest.approx(s.weight + 0.5)
+    assert s.rod_material.name == "pmma"
+    assert s.with_young(100e9).rod_material.young == 3.3e9  # different material: unchanged
+    assert scenes.scene_from_dict(scenes.scene_to_dict(s)) == s
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    ("radius_m = 7.938e-3", "radius = 7.938e-3", "did you mean 'radius_m'"),
+    ("f_max_Hz = 3500", "f_max_hz = 3500", "did you mean 'f_max_Hz'"),
+    ("poisson = 0.27", "poisson = 0.7", "'poisson' must lie in"),
+    ("radius_m = 7.938e-3", "radius_m = -1.0", "'radius_m' must be > 0"),
+    ("f_max_Hz = 3500", "f_max_Hz = 1000", "must be below"),
+    ('material = "steel"\n[rod]', 'material = "stee"\n[rod]', "did you mean 'steel'"),
+    ("length_m = 0.1\n", "", "missing required key 'length_m'"),
+    ("[drive]", "colour = 1\n[drive]", "[surfaces] unknown key 'colour'"),
+    ('name = "t"', 'name = "t"\nyoung_range_Pa = [210e9, 190e9]', "young_range_Pa"),
+])
+def test_errors_name_file_and_key(tmp_path, old, new, needle):
+    assert old in BASE
+    p = _toml(tmp_path, BASE.replace(old, new, 1), "bad_scene.toml")
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(p)
+    assert "bad_scene.toml" in str(exc.value)
+    assert needle in str(exc.value)
+
+
+def test_bad_toml_and_missing_file(tmp_path):
+    with pytest.raises(SceneError, match="not valid TOML"):
+        scenes.load_scene(_toml(tmp_path, "name = ", "broken.toml"))
+    with pytest.raises(SceneError, match="no such scene file"):
+        scenes.load_scene(tmp_path / "nope.toml")
+    with pytest.raises(SceneError, match="did you mean 'paper'"):
+        scenes.builtin_scene("papr")
+
+
+def _run_cli(argv, capsys):
+    from workflows import cmd_scene
+
+    parser = argparse.ArgumentParser()
+    cmd_scene.register(parser.add_subparsers())
+    args = parser.parse_args(argv)
+    rc = args.func(args)
+    return rc, capsys.readouterr().out
+
+
+def test_scene_command_json_paper_numbers(capsys):
+    """The paper's Sec. 4 numbers, from the CLI's JSON (Hertz, JKR, viscous, adhesion)."""
+    rc, out = _run_cli(["scene", "--json"], capsys)
+    assert rc == 0
+    q = json.loads(out)
+    assert q["mass_kg"] == pytest.approx(4 / 3 * math.pi * PAPER_R**3 * PAPER_RHO)
+    lo, hi = q["per_young"]
+    assert (lo["young_Pa"], hi["young_Pa"]) == (190e9, 210e9)
+    assert round(lo["hertz"]["delta0_m"] * 1e9) == 55 and round(hi["hertz"]["delta0_m"] * 1e9) == 52
+    assert 2.55e3 < lo["hertz"]["f0_Hz"] < hi["hertz"]["f0_Hz"] < 2.75e3
+    assert lo["jkr"]["f0_Hz"] > lo["hertz"]["f0_Hz"]
+    # A = 1.23e-5 s (190 GPa) and 1.12e-5 s (210 GPa): the paper's 1.1e-5 is the 210 GPa end
+    assert hi["viscoelastic"]["A_s"] == pytest.approx(1.1e-5, rel=0.03)
+    assert round(lo["viscoelastic"]["Q_hertz"]) == 5
+    assert lo["adhesion"]["law"] == "JKR"
+    # rod: bar velocity sqrt(E/rho); the PC branch equals it to 1e-4 at f0
+    assert lo["rod"]["bar_velocity_m_s"] == pytest.approx(math.sqrt(190e9 / 7700))
+    assert lo["rod"]["pochhammer_chree_group_velocity_at_f0_m_s"] == \
+        pytest.approx(lo["rod"]["bar_velocity_m_s"], rel=1e-4)
+    assert all(k.endswith(("_m", "_Hz", "_N_m", "_N", "_Pa", "_kg", "_s", "_m_s", "_m_s2"))
+               or k in {"scene", "description", "per_young", "source"} for k in q)
+
+
+def test_scene_command_text_and_error(tmp_path, capsys):
+    rc, out = _run_cli(["scene", "--builtin", "micro_bead"], capsys)
+    assert rc == 0 and "micro_bead" in out and "Maugis" in out
+    from workflows.cli import UserError
+
+    with pytest.raises(UserError, match="did you mean"):
+        _run_cli(["scene", str(_toml(tmp_path, BASE.replace("radius_m =", "radius =")))],
+                 capsys)

@@ -1,0 +1,42 @@
+"""``beadrod bench {physics,accuracy,inference}``: measured speed and accuracy tables.
+
+Benchmarks are not timed tests: each writes what it measured (compile time
+apart from run time) to a CSV and a Markdown table in the output folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+from pathlib import Path
+
+__all__ = ["register", "BENCHES"]
+
+BENCHES: dict[str, str] = {
+    "physics": "workflows.bench_physics",
+    "accuracy": "workflows.bench_accuracy",
+    "inference": "workflows.bench_inference",
+}
+
+
+def _run(args: argparse.Namespace) -> int:
+    module = importlib.import_module(BENCHES[args.which])
+    md = module.run(Path(args.out), quick=args.quick)
+    if not args.quiet:
+        print(Path(md).read_text())
+        print(f"written: {md}")
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "bench",
+        help="measure speed and accuracy (physics, accuracy ladder, inference)",
+        description="Run a benchmark and write its results table (CSV + Markdown).",
+    )
+    p.add_argument("which", choices=sorted(BENCHES), help="which benchmark to run")
+    p.add_argument("--out", default="bench-results", help="output folder (default: %(default)s)")
+    p.add_argument("--quick", action="store_true",
+                   help="tiny counts (smoke run; numbers not meaningful)")
+    p.add_argument("--quiet", action="store_true", help="do not print the table")
+    p.set_defaults(func=_run)

@@ -1,0 +1,71 @@
+"""``beadrod plan``: which effects a scene calls for, why, and the error of leaving each out."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "plan",
+        help="the effects the simulator includes for a scene, and why",
+        description="For a scene, decide each effect (rod dynamics, higher rod modes, rod "
+        "dispersion, adhesion law, viscous losses, jumps, contact loss, plasticity, number "
+        "of harmonics) and the rung of the accuracy ladder: the dimensionless number, its "
+        "threshold, and a bound on the error in Delta f/f0 of leaving the effect out.",
+    )
+    p.add_argument("scene", nargs="?", type=Path, default=None,
+                   help="scene TOML file (default: the paper's built-in scene)")
+    p.add_argument("--builtin", metavar="NAME", default=None,
+                   help="a built-in scene (paper, strong_drive, large_soft_bead, micro_bead)")
+    p.add_argument("--amplitude-max", type=float, default=None, metavar="M",
+                   help="largest first-harmonic amplitude delta_a [m] (default: Q times the "
+                   "largest base displacement)")
+    p.add_argument("--tolerance", type=float, default=None, metavar="T",
+                   help="acceptable error in Delta f/f0 (default 5e-3)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=run)
+    return p
+
+
+def _fmt(v) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _text(plan) -> str:
+    n = plan.numbers
+    lines = [f"scene {plan.scene_name}: contact law {plan.contact_law}, rung {plan.rung}, "
+             f"H = {plan.harmonics} harmonics (tolerance {plan.tolerance:g} in Delta f/f0)",
+             f"  f0 = {n['f0_Hz']:.5g} Hz, delta0 = {n['delta0_m']:.4g} m, Q = {_fmt(n['q'])}, "
+             f"x_max = {n['x_max']:.3g} ({n['amplitude_source']})"]
+    for e in plan.effects:
+        mark = "INCLUDE" if e.included else "leave out"
+        lines.append(f"  {e.name:<15} {mark:<9} {e.quantity} = {_fmt(e.value)} "
+                     f"(threshold {_fmt(e.threshold)}), error bound {_fmt(e.error_bound)}")
+        lines.append(f"      {e.reason}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from models.plan import DEFAULT_TOLERANCE, plan_scene
+    from models.scenes import SceneError
+    from workflows.cli import UserError
+    from workflows.cmd_scene import resolve_scene
+
+    try:
+        scene, _ = resolve_scene(args.scene, args.builtin)
+        tol = DEFAULT_TOLERANCE if args.tolerance is None else args.tolerance
+        if not tol > 0:
+            raise ValueError(f"--tolerance must be > 0, got {tol}")
+        plan = plan_scene(scene, amplitude_max=args.amplitude_max, tolerance=tol)
+    except (SceneError, ValueError) as exc:
+        raise UserError(str(exc)) from None
+    if args.json:
+        print(json.dumps(plan.to_dict(), indent=2))
+    else:
+        print(_text(plan))
+    return 0

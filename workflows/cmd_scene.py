@@ -1,0 +1,197 @@
+"""``beadrod scene``: every derived quantity of a scene, per Young's modulus of its range.
+
+Default: the paper's setup (E = 190 and 210 GPa). JSON keys carry their SI unit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+__all__ = ["register", "scene_quantities", "resolve_scene"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "scene",
+        help="print every derived quantity of a scene (default: the paper's setup)",
+        description="Derived quantities of a bead-rod scene for each Young's modulus of its "
+        "range (the paper: E = 190 and 210 GPa): mass, weight, E*, static overlap, "
+        "stiffness and linear resonance per contact law (Hertz, JKR, DMT, power law), "
+        "viscous A and Q, adhesion map (Muller mu, Tabor lambda, regime), pull-off and "
+        "plastic-limit forces, dynamic force, and rod wave velocities.",
+    )
+    p.add_argument("scene", nargs="?", type=Path, default=None,
+                   help="scene TOML file (see models/scenes/paper.toml for the layout)")
+    p.add_argument("--builtin", metavar="NAME", default=None,
+                   help="a built-in scene instead of a file (paper, strong_drive, "
+                   "large_soft_bead, micro_bead)")
+    p.add_argument("--n", dest="exponents", type=float, nargs="+", default=[2.0],
+                   metavar="N", help="power-law exponents to report, with the Hertz "
+                   "static overlap as delta0 (default: 2, the soft-shell law)")
+    p.add_argument("--json", action="store_true", help="machine-readable output (SI keys)")
+    p.set_defaults(func=run)
+    return p
+
+
+def resolve_scene(path: Path | None, builtin: str | None):
+    """The scene named by a file or a built-in name (default: the paper's)."""
+    from models.scenes import builtin_scene, load_scene
+
+    if path is not None and builtin is not None:
+        raise ValueError("give either a scene file or --builtin, not both")
+    if path is not None:
+        return load_scene(path), str(path)
+    name = builtin or "paper"
+    return builtin_scene(name), f"builtin:{name}"
+
+
+def _f(x) -> float:
+    return float(x)
+
+
+def _per_young(scene, exponents) -> dict:
+    from models import adhesion, dmt, hertz, jkr, powerlaw, rod, viscoelastic
+
+    m, load, es, r = scene.mass, scene.load, scene.e_star, scene.radius
+    gamma = scene.surface_energy
+    out: dict = {"young_Pa": scene.bead_material.young, "e_star_Pa": es}
+    d0 = _f(hertz.static_overlap(load, e_star=es, radius=r))
+    k0 = _f(hertz.linear_stiffness(load, e_star=es, radius=r))
+    f0 = _f(hertz.linear_frequency(load, m, e_star=es, radius=r))
+    out["hertz"] = {"delta0_m": d0, "K0_N_m": k0, "f0_Hz": f0}
+    for name, mod in (("jkr", jkr), ("dmt", dmt)):
+        kw = {"e_star": es, "radius": r, "gamma": gamma}
+        out[name] = {"delta0_m": _f(mod.static_overlap(load, **kw)),
+                     "K0_N_m": _f(mod.linear_stiffness(load, **kw)),
+                     "f0_Hz": _f(mod.linear_frequency(load, m, **kw)),
+                     "pull_off_force_N": _f(mod.pull_off_force(gamma=gamma, radius=r))}
+    out["powerlaw"] = [
+        {"n": n, "delta0_m": d0, "K0_N_m": _f(powerlaw.linear_stiffness(load, d0, n)),
+         "f0_Hz": _f(powerlaw.linear_frequency(load, m, d0, n)),
+         "hurst": _f(powerlaw.hurst_from_exponent(n))}
+        for n in exponents]
+    omega0 = 2 * math.pi * f0
+    if scene.viscosity is not None:
+        soft = min((scene.bead_material, scene.rod_material), key=lambda mt: mt.young)
+        a = _f(viscoelastic.damping_constant(eta1=scene.viscosity, young=soft.young,
+                                             poisson=soft.poisson))
+        out["viscoelastic"] = {
+            "eta_Pa_s": scene.viscosity, "A_s": a,
+            "Q_hertz": _f(viscoelastic.linear_q(damping_constant=a, omega0=omega0)),
+            "gamma_n_kg_m-1/2_s-1": _f(viscoelastic.kuwabara_kono_gamma(
+                e_star=es, radius=r, damping_constant=a)),
+            "k_n_N_m-3/2": _f(hertz.stiffness_constant(e_star=es, radius=r)),
+        }
+    regime = adhesion.adhesion_regime(load, gamma=gamma, radius=r, e_star=es)
+    out["adhesion"] = {
+        "muller_mu": regime["mu"],
+        "tabor_lambda": _f(adhesion.tabor_parameter(gamma=gamma, radius=r, e_star=es)),
+        "adhesion_to_load": regime["ratio"],
+        "load_to_adhesion": 1.0 / regime["ratio"] if regime["ratio"] > 0 else math.inf,
+        "law": regime["law"], "reason": regime["reason"]}
+    forces = {"dynamic_force_at_f0_N": _f(adhesion.dynamic_force(m, omega0, d0)),
+              "dynamic_force_at_f_max_N": _f(adhesion.dynamic_force(
+                  m, 2 * math.pi * scene.f_max, d0))}
+    if scene.yield_strength is not None:
+        for conv in ("paper", "johnson"):
+            forces[f"plastic_limit_{conv}_N"] = _f(adhesion.plastic_limit_force(
+                yield_strength=scene.yield_strength, radius=r, e_star=es, convention=conv))
+    out["forces"] = forces
+    mat = scene.rod_material
+    kw = {"young": mat.young, "poisson": mat.poisson, "density": mat.density,
+          "radius": scene.rod_radius}
+    _, vt, _ = (float(v) for v in _speeds(mat))
+    rod_out = {
+        "bar_velocity_m_s": _f(rod.bar_velocity(mat.young, mat.density)),
+        "rayleigh_phase_velocity_at_f0_m_s": _f(rod.rayleigh_velocity(f0, **kw)),
+        "rayleigh_group_velocity_at_f0_m_s": _f(rod.rayleigh_group_velocity(f0, **kw)),
+        "ka_at_f0": 2 * math.pi * f0 / _f(rod.bar_velocity(mat.young, mat.density))
+        * scene.rod_radius,
+        "free_free_resonance_Hz": _f(rod.first_resonance_free_free(
+            scene.rod_length, young=mat.young, density=mat.density)),
+        "fixed_free_resonance_Hz": _f(rod.first_resonance_fixed_free(
+            scene.rod_length, young=mat.young, density=mat.density)),
+        "measured_first_resonance_Hz": scene.rod_first_resonance,
+    }
+    if 2 * math.pi * f0 * scene.rod_radius / vt < rod.OMEGA_MAX:
+        rod_out["pochhammer_chree_phase_velocity_at_f0_m_s"] = _f(
+            rod.first_branch_phase_velocity(f0, **kw))
+        rod_out["pochhammer_chree_group_velocity_at_f0_m_s"] = _f(
+            rod.first_branch_group_velocity(f0, **kw))
+    else:
+        rod_out["pochhammer_chree_note"] = "f0 above the first-branch solver's range"
+    out["rod"] = rod_out
+    return out
+
+
+def _speeds(mat):
+    from models.materials import wave_speeds
+    return wave_speeds(mat.young, mat.poisson, mat.density)
+
+
+def scene_quantities(scene, exponents=(2.0,)) -> dict:
+    """All derived quantities of ``scene``, one block per Young's modulus (JSON-ready)."""
+    import jax
+
+    with jax.enable_x64(True):
+        return {
+            "scene": scene.name, "description": scene.description,
+            "mass_kg": scene.mass, "weight_N": scene.weight, "load_N": scene.load,
+            "radius_m": scene.radius, "gravity_m_s2": scene.gravity,
+            "drive_displacement_max_m": scene.drive_displacement_max,
+            "per_young": [_per_young(scene.with_young(e), list(exponents))
+                          for e in scene.young_values()],
+        }
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)
+
+
+def _text(q: dict) -> str:
+    lines = [f"scene: {q['scene']} - {q['description']}"]
+    for k in ("mass_kg", "weight_N", "load_N", "radius_m", "drive_displacement_max_m"):
+        lines.append(f"  {k:<34} {_fmt(q[k])}")
+    for block in q["per_young"]:
+        lines.append(f"E = {block['young_Pa'] / 1e9:g} GPa   (E* = {block['e_star_Pa']:.6g} Pa)")
+        for sec in ("hertz", "jkr", "dmt", "viscoelastic", "adhesion", "forces", "rod"):
+            if sec not in block:
+                continue
+            lines.append(f"  [{sec}]")
+            lines += [f"    {k:<42} {_fmt(v)}" for k, v in block[sec].items()]
+        for pl in block["powerlaw"]:
+            lines.append(f"  [powerlaw n = {pl['n']:g}]")
+            lines += [f"    {k:<42} {_fmt(v)}" for k, v in pl.items() if k != "n"]
+    return "\n".join(lines)
+
+
+def _json_safe(v):
+    if isinstance(v, float) and not math.isfinite(v):
+        return "inf" if v > 0 else "nan"
+    if isinstance(v, dict):
+        return {k: _json_safe(w) for k, w in v.items()}
+    if isinstance(v, list):
+        return [_json_safe(w) for w in v]
+    return v
+
+
+def run(args: argparse.Namespace) -> int:
+    from models.scenes import SceneError
+    from workflows.cli import UserError
+
+    try:
+        scene, source = resolve_scene(args.scene, args.builtin)
+    except (SceneError, ValueError) as exc:
+        raise UserError(str(exc)) from None
+    q = scene_quantities(scene, args.exponents)
+    q["source"] = source
+    if args.json:
+        print(json.dumps(_json_safe(q), indent=2))
+    else:
+        print(_text(q))
+    return 0

@@ -1,0 +1,133 @@
+"""Run configuration: defaults, a TOML file, then command-line flags (flags win).
+
+The resolved configuration is a plain nested dict written into every output
+folder (``config.resolved.toml`` and inside the result JSON), so a run can be
+repeated exactly. Unknown keys are errors with a "did you mean" suggestion.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import tomllib
+from pathlib import Path
+from typing import Any
+
+__all__ = ["DEFAULTS", "ConfigError", "load_config", "merge", "resolve", "to_toml"]
+
+DEFAULTS: dict[str, Any] = {
+    "data": None,  # dataset folder; None = the embedded synthetic default
+    "out": "beadrod-out",
+    "laws": None,  # None = every law in the inference registry
+    "rung": "backbone",  # forward-model rung: first_order | backbone
+    "seed": 0,
+    "quiet": False,
+    "sampling": {"chains": 4, "warmup": 400, "samples": 400, "target_accept": 0.9},
+    "evidence": {
+        "live_points": 300,
+        "smc_particles": 600,
+        "smc_seeds": 3,
+        "methods": ["ns", "smc"],
+    },
+    "likelihood": {
+        "robust": False,  # Student-t instead of Gaussian for the shift
+        "use_q": True,  # reference Q enters the likelihood where a law predicts Q
+        "two_percent_rule": True,
+        "shift_reference": "first",  # first | previous reference sweep
+    },
+    "tension": {"enabled": True},
+    "report": {"figures": True, "pair_plots": True, "rank_plots": True},
+}
+
+
+class ConfigError(ValueError):
+    """A configuration the user must fix (unknown key, wrong type)."""
+
+
+def _suggest(key: str, options: list[str]) -> str:
+    close = difflib.get_close_matches(key, options, n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _check(cfg: dict[str, Any], ref: dict[str, Any], where: str, source: str) -> None:
+    for key, val in cfg.items():
+        if key not in ref:
+            raise ConfigError(
+                f"{source}: unknown key '{where}{key}'{_suggest(key, list(ref))}; "
+                f"known keys: {', '.join(sorted(ref))}"
+            )
+        if isinstance(ref[key], dict):
+            if not isinstance(val, dict):
+                raise ConfigError(f"{source}: '{where}{key}' must be a table")
+            _check(val, ref[key], f"{where}{key}.", source)
+        elif ref[key] is not None and not isinstance(val, type(ref[key])):
+            ok = isinstance(ref[key], float) and isinstance(val, int)
+            if not ok:
+                raise ConfigError(
+                    f"{source}: '{where}{key}' must be {type(ref[key]).__name__}, "
+                    f"got {type(val).__name__} ({val!r})"
+                )
+
+
+def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """Deep merge: values of ``over`` win; ``None`` in ``over`` means 'not set'."""
+    out = copy.deepcopy(base)
+    for key, val in over.items():
+        if val is None:
+            continue
+        if isinstance(val, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], val)
+        else:
+            out[key] = copy.deepcopy(val)
+    return out
+
+
+def load_config(path: str | Path) -> dict[str, Any]:
+    """Read and check a TOML config file (keys as in :data:`DEFAULTS`)."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            cfg = tomllib.load(fh)
+    except FileNotFoundError as exc:
+        raise ConfigError(f"{path}: config file not found") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
+    _check(cfg, DEFAULTS, "", str(path))
+    return cfg
+
+
+def resolve(config_file: str | Path | None, flags: dict[str, Any]) -> dict[str, Any]:
+    """Defaults <- config file <- flags (flags given as a nested dict; None = unset)."""
+    cfg = copy.deepcopy(DEFAULTS)
+    if config_file is not None:
+        cfg = merge(cfg, load_config(config_file))
+    _check({k: v for k, v in flags.items() if v is not None}, DEFAULTS, "", "command line")
+    return merge(cfg, flags)
+
+
+def _fmt(val: Any) -> str:
+    if isinstance(val, bool):
+        return "true" if val else "false"
+    if isinstance(val, str):
+        return '"' + val.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(val, (list, tuple)):
+        return "[" + ", ".join(_fmt(v) for v in val) + "]"
+    return repr(val)
+
+
+def to_toml(cfg: dict[str, Any]) -> str:
+    """Serialise a resolved config (None values are written as comments)."""
+    lines: list[str] = []
+    tables: list[tuple[str, dict[str, Any]]] = []
+    for key, val in cfg.items():
+        if isinstance(val, dict):
+            tables.append((key, val))
+        elif val is None:
+            lines.append(f"# {key} = (default)")
+        else:
+            lines.append(f"{key} = {_fmt(val)}")
+    for name, table in tables:
+        lines.append(f"\n[{name}]")
+        for key, val in table.items():
+            lines.append(f"# {key} = (default)" if val is None else f"{key} = {_fmt(val)}")
+    return "\n".join(lines) + "\n"
