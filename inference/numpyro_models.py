@@ -163,7 +163,7 @@ def check_backbone() -> None:
     @jax.jit
     def probe(x, n):
         total = lambda xx, nn: jnp.sum(fn(xx, nn))
-        return fn(x[None, :], n[:, None]), jax.grad(total, argnums=(0, 1))(x, n[1])
+        return jax.vmap(lambda nn: fn(x, nn))(n), jax.grad(total, argnums=(0, 1))(x, n[1])
 
     val, (gx, gn) = probe(x, n)
     if not (jnp.all(jnp.isfinite(val)) and jnp.all(jnp.isfinite(gx)) and jnp.isfinite(gn)):
@@ -299,6 +299,12 @@ def build_model(spec: ModelSpec | str, n_protocols: int | None = None,
         spec = ModelSpec(law=spec, **kw)
     elif kw:
         spec = replace(spec, **kw)
+    # import the forward modules now, outside any trace: a first import under jit would
+    # turn their module-level jnp constants into leaked tracers
+    needed = {"hertz": ["shift"], "powerlaw": ["shift"], "viscoelastic": ["shift", "viscoelastic"],
+              "jkr": ["shift", "jkr"], "baseline": []}[spec.law]
+    for mod in needed:
+        _module(mod)
     if spec.rung == "backbone" and spec.law != "baseline":
         if spec.law == "jkr":
             raise ForwardModelUnavailable(

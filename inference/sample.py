@@ -18,7 +18,7 @@ from typing import Any
 import arviz as az
 import jax
 import numpyro
-from numpyro.infer import MCMC, NUTS, Predictive
+from numpyro.infer import MCMC, NUTS, Predictive, init_to_median
 
 from .likelihood import without_observations
 
@@ -76,8 +76,10 @@ def run_nuts(
     cost of a 1-warmup/1-sample run of the same kernel (compilation alone; subtract it
     from nuts_s for the sampling cost).
     """
+    # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
+    # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
     kernel = NUTS(model, target_accept_prob=target_accept, max_tree_depth=max_tree_depth,
-                  dense_mass=dense_mass)
+                  dense_mass=dense_mass, init_strategy=init_to_median(num_samples=15))
     method = _chain_method(num_chains, chain_method)
     mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_samples,
                 num_chains=num_chains, chain_method=method, progress_bar=False)

@@ -23,7 +23,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
-from numpyro.infer import MCMC, NUTS, Predictive
+from numpyro.infer import MCMC, NUTS, Predictive, init_to_median
 from scipy import stats
 
 from .likelihood import design_inputs, without_observations  # noqa: F401  (re-export)
@@ -84,9 +84,12 @@ def run_sbc(
     names = _scalar_sites({k: prior[k] for k in latent
                            if k not in ("delta0", "f0_pred", "shift_pred", "q_pred",
                                         "e_star")}, params)
-    kernel = NUTS(model, target_accept_prob=0.9, dense_mass=True)
+    kernel = NUTS(model, target_accept_prob=0.9, dense_mass=True,
+                  init_strategy=init_to_median(num_samples=15))
+    # progress_bar=True is numpyro 0.22's path that keeps the compiled sampler between
+    # run() calls (with False it recompiles every replicate); the bar goes to stderr
     mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_samples * thin, num_chains=1,
-                progress_bar=False, jit_model_args=True)
+                progress_bar=True, jit_model_args=True)
     ranks = {k: np.zeros(n_replicates, int) for k in names}
     divs = np.zeros(n_replicates, int)
     base = {k: v for k, v in design.items() if k != "n_protocols"}

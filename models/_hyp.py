@@ -16,7 +16,7 @@ Euler integral gives (derivation in ``mean_power_clipped``)
 
 which equals the first form at x = 1: 2^m Gamma(m + 1/2)/(sqrt(pi) Gamma(m + 1)).
 
-Method (fixed cost, no iteration, so it vectorises and differentiates):
+Method (fixed cost, no data-dependent iteration: it vectorises and differentiates):
 
 * x^2 < 1/2: quadratic transformation (Abramowitz & Stegun 15.3.19, a = -m/2),
   2F1(-m/2, (1-m)/2; 1; x^2) = ((1 + s)/2)^m 2F1(-m, -m; 1; w),
@@ -30,28 +30,36 @@ Method (fixed cost, no iteration, so it vectorises and differentiates):
   |eps| <= 1/2, the two pole-carrying series are combined term by term into a
   divided difference in eps (the derivation is the one of A&S 15.3.11-12 before
   the limit eps -> 0 is taken):
-      F = Gamma(c)/(Gamma(c-a) Gamma(c-b)) * [ Gamma(N+eps) Sum_{k<N} (a)_k (b)_k y^k/((1-N-eps)_k k!)
-          - (-1)^N Gamma(1+eps) y^N Sum_j t_j y^j ((y^eps - 1)/eps + D_j y^eps) ],
+      F = Gamma(c)/(Gamma(c-a) Gamma(c-b))
+          * [ Gamma(N+eps) Sum_{k<N} (a)_k (b)_k y^k/((1-N-eps)_k k!)
+              - (-1)^N Gamma(1+eps) y^N Sum_j t_j y^j ((y^eps - 1)/eps + D_j y^eps) ],
       t_j = (a)_{N+j} (b)_{N+j} / ((1-eps)_j (N+j)!),
       D_j = (u_j(eps)/u_j(0) - 1)/eps,
       u_j(e) = Gamma(a+N+j+e) Gamma(b+N+j+e) / (Gamma(1+N+j+e) Gamma(1+j+e-eps)).
   (y^eps - 1)/eps and D_j are computed without cancellation: D_0 from a Taylor
   series in eps of the log-Gamma combination (coefficients from Hurwitz zeta
-  values, built once at import), D_{j+1} = D_j + beta_j (1 + eps D_j) with
+  values, built once at import; log1p(-eps) split off so 36 terms reach 1e-17
+  for |eps| <= 1/2), D_{j+1} = D_j + beta_j (1 + eps D_j) with
   beta_j a rational function of eps. The result is smooth in m through the
   integer points, where it reduces to the logarithmic case.
 
 Accuracy: <= 1e-14 relative against mpmath (tests/test_hyp.py), 0 <= m <= 3,
 every x >= 0, x = 1 included. Domain: 0 <= m <= 3 (n in [1, 4]); NaN outside.
 
-Gradients: plain JAX autodiff through the series, finite everywhere in the
-domain except at exactly x = 1, where the true d/dx (m/x)(<(..)^m> - <(..)^(m-1)>)
+Gradients (forward-mode JAX derivatives of the series, see Cost) are finite
+everywhere in the domain except at exactly x = 1, where the true d/dx (m/x)(<(..)^m> - <(..)^(m-1)>)
 is finite only for m > 1/2 (or m = 0) and is -infinity for 0 < m <= 1/2
 (the integrand (1 + sin t)^(m-1) is not integrable at t = -pi/2). At x = 1 the
 derivative is supplied in closed form, d/dx = -m (1-m) 2^(m-1) Gamma(m-1/2) /
 (sqrt(pi) Gamma(m+1)) for m > 1/2, and as the finite stand-in ``-1e300`` where
 it is -infinity (finite so that 0 * gradient stays 0: no NaN can appear).
 Just below/above x = 1 the derivative is finite but large (~ |1 - x|^(m - 1/2)).
+
+Cost: fixed trip counts (22 + 56 series terms, 36 Horner steps; no data-dependent
+loops, which under vmap cost more than they save), both branches evaluated under
+vmap. Gradients go through a custom_jvp whose rule takes both partials by forward
+mode on the primal (two tangent lanes): reverse mode then only transposes
+g_x dx + g_m dm, instead of sweeping back through the series.
 """
 
 from __future__ import annotations

@@ -228,7 +228,7 @@ def _backbone_jvp(nodes, primals, tangents):
     dx, dn = tangents
     qmax = _qmax_of_x(x, n, nodes)
     p = jnp.stack([qmax, n])
-    (om, a1), jac = powerlaw_orbit(qmax, n, nodes)[:2], jax.jacfwd(
+    om, jac = powerlaw_orbit(qmax, n, nodes)[0], jax.jacfwd(
         lambda v: jnp.stack(powerlaw_orbit(v[0], v[1], nodes)[:2]))(p)
     dq = (dx - jac[1, 1] * dn) / jac[1, 0]
     return om - 1.0, jac[0, 0] * dq + jac[0, 1] * dn

@@ -128,6 +128,7 @@ def _implicit(fun, x0, iters):
     return jax.lax.custom_root(fun, x0, solver, tangent_solve)
 
 
+@partial(jax.jit, static_argnames=("harmonics", "n_time", "iters"))
 def solve(law: ContactLaw, drive: ArrayLike, omega: ArrayLike, x0: jnp.ndarray | None = None,
           *, harmonics: int = 3, n_time: int | None = None, iters: int = 40) -> jnp.ndarray:
     """Harmonic coefficients X at one frequency [-] (IFT-differentiable)."""
@@ -190,10 +191,11 @@ def frf(law: ContactLaw, drive: ArrayLike, omega_lo: float = 0.8, omega_hi: floa
     Fixed number of predictor-corrector steps (``n_steps``); the step length adapts
     (x1.3 after a success, x0.5 and retry after a failed corrector or a tangent that
     turned by more than ``max_turn`` rad), capped at ``ds_max`` (default: 1.5 x an
-    arc-length estimate / n_steps). ``complete`` tells whether omega_hi was reached. The peak is refined by a Newton solve of R = 0,
-    dA/ds = 0 from the best point on the arc. Folds are the
-    sign changes of dOmega/ds: an up sweep leaves the branch where Omega turns back
-    (a local maximum of Omega along the arc), a down sweep where it turns forward.
+    arc-length estimate / n_steps); ``complete`` tells whether omega_hi was reached.
+    The peak is refined by a Newton solve of R = 0, dA/ds = 0 from the best point on
+    the arc (kept only if it stays beside it). Folds are the sign changes of dOmega/ds:
+    an up sweep leaves the branch where Omega turns back (a local maximum of Omega
+    along the arc), a down sweep where it turns forward.
     """
     h = harmonics
     dim = 2 * h + 2
@@ -258,6 +260,9 @@ def frf(law: ContactLaw, drive: ArrayLike, omega_lo: float = 0.8, omega_hi: floa
                                 _peak_condition(x, o, drive, law, h, n_time)[None]])
 
     zpk, okpk = _newton(peak_fun, zs[i], 30)
+    # accept the refined peak only if it stays beside the best arc point (near a fold
+    # the peak system is nearly singular and Newton may wander)
+    okpk = okpk & (jnp.abs(zpk[-1] - zs[i, -1]) < 2.0 * ds_max) & (amplitude(zpk[:-1]) >= amp[i])
     zpk = jnp.where(okpk, zpk, zs[i])
     return FRC(om, zs[:, :-1], amp, valid, zpk[-1], amplitude(zpk[:-1]), up, down,
                complete)
@@ -286,7 +291,9 @@ def peak_at_drive(law: ContactLaw, drive: ArrayLike, *, omega_guess: ArrayLike =
     """Resonance peak (max first-harmonic amplitude over Omega) at drive E.
 
     Solves R = 0 together with dA/ds = 0 along the branch (unknowns X, Omega);
-    IFT-differentiable. Returns (Omega_peak, x_peak, X).
+    IFT-differentiable. Needs a good initial guess: near a fold (hysteretic curves,
+    contact loss) the system is nearly singular; :func:`frf` gives a robust peak.
+    Returns (Omega_peak, x_peak, X).
     """
     h = harmonics
     amp0 = drive / _damping_guess(law) if amplitude_guess is None else amplitude_guess
@@ -302,11 +309,14 @@ def peak_at_drive(law: ContactLaw, drive: ArrayLike, *, omega_guess: ArrayLike =
 
 
 def peak_at_amplitude(law: ContactLaw, x_peak: ArrayLike, *, omega_guess: ArrayLike = 1.0,
-                      harmonics: int = 3, n_time: int | None = None,
-                      iters: int = 60) -> tuple[jnp.ndarray, ...]:
+                      x_guess: jnp.ndarray | None = None, harmonics: int = 3,
+                      n_time: int | None = None, iters: int = 60) -> tuple[jnp.ndarray, ...]:
     """Drive E and peak Omega such that the resonance peak has amplitude ``x_peak``.
 
     Unknowns (X, Omega, E), equations R = 0, dA/ds = 0, A = x_peak; IFT-differentiable.
+    Start it from the conservative backbone (:func:`backbone`: ``omega_guess`` and
+    ``x_guess``); near contact loss the system is nearly singular, so check the
+    residual of the result (models/ladder.py does).
     Returns (Omega_peak, E, X). The resonance shift at amplitude x is Omega_peak - 1.
     """
     h = harmonics
@@ -318,7 +328,8 @@ def peak_at_amplitude(law: ContactLaw, x_peak: ArrayLike, *, omega_guess: ArrayL
                                 _peak_condition(x, om, e, law, h, n_time)[None],
                                 (amplitude(x) - x_peak)[None]])
 
-    z0 = jnp.concatenate([_x_guess(h, x_peak), jnp.stack([jnp.asarray(omega_guess, float),
+    xg = _x_guess(h, x_peak) if x_guess is None else x_guess
+    z0 = jnp.concatenate([xg, jnp.stack([jnp.asarray(omega_guess, float),
                                                           jnp.asarray(e0, float)])])
     z = _implicit(fun, z0, iters)
     return z[-2], z[-1], z[:-2]

@@ -48,9 +48,19 @@ def rung1_series(x: ArrayLike, n: ArrayLike = 1.5, **_) -> jnp.ndarray:
 
 def rung2_first_order(x: ArrayLike, n: ArrayLike = 1.5, **_) -> jnp.ndarray:
     """Rung 2: first-order averaged stiffness (paper's estimate; Hertz: -x^2/32 + ...)."""
-    from .shift import first_order_powerlaw
+    return _first_order()(jnp.asarray(x, float), jnp.asarray(n, float))
 
-    return first_order_powerlaw(x, n)
+
+_FIRST_ORDER = []
+
+
+def _first_order():
+    """jit of models.shift.first_order_powerlaw, imported on first use."""
+    if not _FIRST_ORDER:
+        from .shift import first_order_powerlaw
+
+        _FIRST_ORDER.append(jax.jit(first_order_powerlaw))
+    return _FIRST_ORDER[0]
 
 
 def rung3_backbone(x: ArrayLike, n: ArrayLike = 1.5, **_) -> jnp.ndarray:
@@ -63,17 +73,35 @@ def _law(n, q_factor):
 
 
 @partial(jax.jit, static_argnames=("harmonics",))
-def _hbm_peak(x, n, q_factor, harmonics):
-    guess = 1.0 + backbone_shift(x, n)
-    return hbm.peak_at_amplitude(_law(n, q_factor), x, omega_guess=guess, harmonics=harmonics)
+def _hbm_peak_jit(x, n, q_factor, harmonics):
+    law = _law(n, q_factor)
+    om_b, x_b = hbm.backbone(PowerLaw(n=n, zeta=0.0), x, omega_guess=1.0 + backbone_shift(x, n),
+                             harmonics=harmonics)
+    om, e, coeffs = hbm.peak_at_amplitude(law, x, omega_guess=om_b, x_guess=x_b,
+                                          harmonics=harmonics)
+    res = jnp.max(jnp.abs(hbm.residual(coeffs, om, e, law, harmonics)))
+    return om, e, res, coeffs
+
+
+def _hbm_peak(x, n, q_factor, harmonics, with_coeffs=False):
+    """(Omega_peak, drive E) whose resonance peak has amplitude x: Newton on the peak
+    system started from the conservative HBM backbone; raises if it did not converge."""
+    om, e, res, coeffs = _hbm_peak_jit(jnp.asarray(x, float), jnp.asarray(n, float), q_factor,
+                                       harmonics)
+    if not (float(res) < 1e-8 and float(e) > 0):
+        raise RuntimeError(f"HBM peak solve failed at x = {x} (residual {float(res):.2e})")
+    return (float(om), float(e), coeffs) if with_coeffs else (float(om), float(e))
 
 
 def rung4_hbm(x: ArrayLike, n: ArrayLike = 1.5, *, q_factor: float = 50.0,
-              harmonics: int = 3, **_) -> jnp.ndarray:
-    """Rung 4: Omega_peak - 1 of the forced response whose peak amplitude is x (HBM, H)."""
-    x = jnp.atleast_1d(jnp.asarray(x, float))
-    om = jax.vmap(lambda v: _hbm_peak(v, jnp.asarray(n, float), q_factor, harmonics)[0])(x)
-    return om - 1.0
+              harmonics: int = 3, **_) -> np.ndarray:
+    """Rung 4: Omega_peak - 1 of the forced response whose peak amplitude is x (HBM, H).
+
+    Newton on (R = 0, dA/dOmega = 0 along the branch, A = x) from the conservative HBM
+    backbone (:func:`models.hbm.peak_at_amplitude`).
+    """
+    return np.asarray([_hbm_peak(float(v), n, q_factor, harmonics)[0] - 1.0
+                       for v in np.atleast_1d(np.asarray(x, float))])
 
 
 def _state_at(coeffs, omega):
@@ -83,12 +111,7 @@ def _state_at(coeffs, omega):
     return jnp.stack([coeffs[0] + jnp.sum(coeffs[1::2]), omega * jnp.sum(k * coeffs[2::2])])
 
 
-def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, rtol=1e-8):
-    law = _law(n, q_factor)
-    om_pk, drive, coeffs = _hbm_peak(jnp.asarray(x, float), jnp.asarray(n, float), q_factor, 7)
-    width = span / q_factor
-    grid = np.asarray(om_pk) + width * np.linspace(1.0, -1.0, points)   # down sweep
-    y0 = _state_at(hbm.solve(law, drive, grid[0], coeffs, harmonics=7), grid[0])
+def _ti_sweep(law, drive, grid, y0, settle, steps, use_scipy, rtol):
     if use_scipy:
         sw = timeint.swept_sine_scipy(law, float(drive), grid, settle_periods=settle,
                                       measure_periods=2, samples_per_period=steps, rtol=rtol,
@@ -99,8 +122,25 @@ def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, 
     amp = np.asarray(sw.amplitude)
     # keep the branch the down sweep rides until it falls off at the fold
     drop = np.nonzero(amp[1:] < 0.9 * amp[:-1])[0]
-    keep = slice(0, drop[0] + 1) if drop.size else slice(None)
-    om_ti, x_ti = timeint.resonance(grid[keep], amp[keep])
+    return amp[: drop[0] + 1] if drop.size else amp
+
+
+def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, rtol=1e-8):
+    law = _law(n, q_factor)
+    # drive and starting state from H = 3 (cheap; the sweep settles the rest and the
+    # amplitude mismatch is corrected along the backbone slope)
+    om_pk, drive, x_pk = _hbm_peak(x, n, q_factor, 3, with_coeffs=True)
+    h = 2.0 * span / q_factor / (points - 1)
+    start = om_pk + span / q_factor
+    for _ in range(2):          # coarse pass, then a pass 12x finer around the maximum
+        grid = start - h * np.arange(points)      # down sweep
+        coeffs = hbm.solve(law, drive, grid[0], x_pk, harmonics=3)   # upper branch
+        y0 = _state_at(coeffs, grid[0])
+        amp = _ti_sweep(law, drive, grid, y0, settle, steps, use_scipy, rtol)
+        i = int(np.argmax(amp))
+        start, h = grid[max(i - 1, 0)], 2.0 * h / (points - 1)
+    g = grid[: amp.size]
+    om_ti, x_ti = timeint.resonance(g, amp) if amp.size >= 3 else (g[i], amp[i])
     return float(om_ti), float(x_ti)
 
 
@@ -110,7 +150,7 @@ def rung5_timeint(x: ArrayLike, n: ArrayLike = 1.5, *, q_factor: float = 50.0,
                   rtol: float = 1e-8, **_) -> np.ndarray:
     """Rung 5: stepped down-sweep by time integration around the peak.
 
-    The drive is the one for which harmonic balance (H = 7) puts the peak amplitude at x;
+    The drive is the one for which harmonic balance (H = 3) puts the peak amplitude at x;
     ``points`` frequencies spaced over +-``span``/Q around the predicted peak, each settled
     for ``settle`` periods (default 2 Q), lock-in over 2 periods; the resonance is the
     parabola through the largest reading and its neighbours on the branch. The measured

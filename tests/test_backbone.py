@@ -82,6 +82,7 @@ def test_backbone_small_amplitude_limit_is_lindstedt(n):
     assert c2 == pytest.approx(float(lindstedt_shift(1.0, n)), rel=2e-5)
 
 
+@pytest.mark.slow
 def test_backbone_amplitude_root_is_solved():
     from models.backbone import _qmax_of_x
     xs = jnp.array([0.05, 0.5, 0.95, 1.2, 2.5])

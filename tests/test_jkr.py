@@ -75,8 +75,8 @@ def test_eq19_equals_parametric_derivative():
     es = estar(200e9)
     ac = float(jkr.critical_radius(e_star=es, **P))
     a = jnp.array([0.6, 0.9, 1.0, 1.3, 2.0, 5.0, 40.0]) * ac
-    dfa = jax.vmap(jax.grad(lambda a: jkr.force_from_contact_radius(a, e_star=es, **P)))(a)
-    dda = jax.vmap(jax.grad(lambda a: jkr.overlap_from_contact_radius(a, e_star=es, **P)))(a)
+    dfa = jax.jit(jax.vmap(jax.grad(lambda a: jkr.force_from_contact_radius(a, e_star=es, **P))))(a)
+    dda = jax.jit(jax.vmap(jax.grad(lambda a: jkr.overlap_from_contact_radius(a, e_star=es, **P))))(a)
     k19 = jkr.stiffness_from_contact_radius(a, e_star=es, **P)
     np.testing.assert_allclose(np.asarray(k19), np.asarray(dfa / dda), rtol=1e-12, atol=1e-6)
     assert float(k19[2]) == pytest.approx(0.0, abs=1e-6)  # K = 0 at ac (load-controlled pull-off)
@@ -114,6 +114,9 @@ def test_force_round_trip_and_root_gradient():
     es = estar(210e9)
     d0 = jkr.static_overlap(LOAD, e_star=es, **P)
     assert float(jkr.force(d0, e_star=es, **P)) == pytest.approx(LOAD, rel=1e-11)
+    # d(delta0)/dF = 1/K0 (the closed-form static overlap differentiates consistently)
+    dd = jax.grad(lambda F: jkr.static_overlap(F, e_star=es, **P))(LOAD)
+    assert float(dd) == pytest.approx(1 / float(jkr.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
     # implicit gradient dF/d(delta) = K (Eq. 19) and vs. mpmath derivative of the inverse
     k = jax.grad(lambda d: jkr.force(d, e_star=es, **P))(d0)
     assert float(k) == pytest.approx(float(jkr.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
@@ -219,9 +222,11 @@ def test_dmt_basics():
 def test_dmt_shift_equals_hertz():
     es = estar(200e9)
     xs = jnp.array([0.3, 0.8, 1.0])
-    got = np.asarray(dmt.shift_first_order(xs, load=LOAD, e_star=es, **P))
+    shift = jax.jit(lambda x, gm: dmt.shift_first_order(x, load=LOAD, e_star=es, radius=R_BEAD,
+                                                        gamma=gm))
+    got = np.asarray(shift(xs, GAMMA))
     for x, v in zip([0.3, 0.8, 1.0], got):
         ref = mp.quad(lambda t, x=x: mp.sqrt(1 + x * mp.sin(t)), [0, mp.pi, 3 * mp.pi / 2, 2 * mp.pi])
         assert v == pytest.approx(float(ref / (4 * mp.pi) - 0.5), abs=1e-9)
-    g = jax.grad(lambda gm: dmt.shift_first_order(0.5, load=LOAD, e_star=es, radius=R_BEAD, gamma=gm))(GAMMA)
+    g = jax.jit(jax.grad(lambda gm: shift(xs, gm)[0]))(GAMMA)
     assert np.isfinite(float(g))

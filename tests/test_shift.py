@@ -65,7 +65,7 @@ def test_powerlaw_against_mpmath_quadrature(n):
 def test_powerlaw_against_scipy_quad():
     for x, n in [(0.7, 1.5), (0.999, 1.3), (1.6, 1.5), (0.5, 2.7)]:
         t0, t1 = (np.arcsin(-1 / x), np.pi - np.arcsin(-1 / x)) if x > 1 else (-np.pi / 2, 1.5 * np.pi)
-        val, _ = integrate.quad(lambda t: max(1 + x * np.sin(t), 0) ** (n - 1), t0, t1,
+        val, _ = integrate.quad(lambda t, x=x, n=n: max(1 + x * np.sin(t), 0) ** (n - 1), t0, t1,
                                 points=[np.pi / 2], epsabs=0, epsrel=1e-13, limit=200)
         assert abs(float(_powerlaw(x, n)) - (val / (4 * np.pi) - 0.5)) < 1e-12
 
@@ -147,7 +147,7 @@ def test_gradients_finite_over_sampler_region():
 def test_gradient_in_n_against_mpmath():
     for x, n in [(0.5, 1.5), (1.0, 1.5), (1.0, 1.2), (1.4, 2.5)]:
         g = float(_grad_n(x, n))
-        ref = mp.diff(lambda nn: ref_shift_quad(x, nn), n)
+        ref = mp.diff(lambda nn, x=x: ref_shift_quad(x, nn), n)
         assert abs(g - float(ref)) < 1e-10
 
 

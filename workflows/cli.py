@@ -51,13 +51,23 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("beadrod: interrupted", file=sys.stderr)
         return 130
-    except UserError as exc:
+    except _user_errors() as exc:
         print(f"beadrod: error: {exc}", file=sys.stderr)
         return 2
 
 
 class UserError(Exception):
     """An error the user can act on (bad data, bad config, refused overwrite)."""
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    """Errors printed as one actionable line (they name the file, row, column or key)."""
+    from data.schema import DataError
+    from models.scenes import SceneError
+
+    from .config import ConfigError
+
+    return (UserError, DataError, SceneError, ConfigError)
 
 
 if __name__ == "__main__":

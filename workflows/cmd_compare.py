@@ -37,8 +37,16 @@ def _flags(args: argparse.Namespace) -> dict[str, Any]:
                   "two_percent_rule": False if args.no_two_percent_rule else None}
     return {"data": args.data, "out": args.out, "seed": args.seed, "rung": args.rung,
             "quiet": True if args.quiet else None,
-            "laws": [args.law] if getattr(args, "law", None) else None,
+            "laws": _laws(args),
             "sampling": sampling, "evidence": evidence, "likelihood": likelihood}
+
+
+def _laws(args: argparse.Namespace) -> list[str] | None:
+    if getattr(args, "law", None):
+        return [args.law]
+    if getattr(args, "laws", None):
+        return [s.strip() for s in args.laws.split(",") if s.strip()]
+    return None
 
 
 def _check_out(out: Path, force: bool, resume: bool) -> None:
@@ -105,9 +113,12 @@ def register(sub) -> None:
                        description="The main job: fit every law by NUTS, check diagnostics, "
                        "compute LOO and the evidence by two estimators, quantify the "
                        "Q-versus-shift tension, and write tables, figures and a report.")
+    from .pipeline import MODEL_SPECS
+
+    p.add_argument("--laws", help="comma-separated subset of laws to fit (default: all of "
+                   f"{', '.join(MODEL_SPECS)})")
     _common(p)
     p.set_defaults(func=_run)
-    from .pipeline import MODEL_SPECS
 
     f = sub.add_parser("fit", help="fit one contact law (same outputs for that law)",
                        description="Fit one law: NUTS, diagnostics, LOO, evidence, figures "

@@ -51,6 +51,8 @@ def _suggest(key: str, options: list[str]) -> str:
 
 def _check(cfg: dict[str, Any], ref: dict[str, Any], where: str, source: str) -> None:
     for key, val in cfg.items():
+        if val is None and key in ref:
+            continue  # 'not set' (a flag left out)
         if key not in ref:
             raise ConfigError(
                 f"{source}: unknown key '{where}{key}'{_suggest(key, list(ref))}; "

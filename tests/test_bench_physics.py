@@ -1,0 +1,32 @@
+"""Smoke run of `beadrod bench physics` (workflows/bench_physics.py) with tiny counts."""
+
+import csv
+
+import pytest
+
+from workflows import bench_physics
+
+
+@pytest.fixture
+def tiny(monkeypatch):
+    sizes = dict(points=64, quad=3, ref=6, grad_ref=2, jax_scipy=0, clipped=3, repeats=2,
+                 quad_rounds=1)
+    monkeypatch.setitem(bench_physics._SIZES, "quick", sizes)
+
+
+def test_bench_physics_writes_tables(tmp_path, tiny):
+    md = bench_physics.run(tmp_path, quick=True)
+    assert md == tmp_path / "bench_physics.md" and md.exists()
+    text = md.read_text()
+    assert "| method |" in text and "## Targets" in text
+    for target in ("1000x faster than quad", "within 3x of scipy.special", "1e-13 relative"):
+        assert target in text
+    with open(tmp_path / "bench_physics.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    by = {r["method"]: r for r in rows}
+    jax_val = by["jax closed form (beadrod), value"]
+    assert float(jax_val["time_per_point_us"]) > 0
+    # the closed form is accurate on the planted hard points (x = 1, n = 3/2 +- 1e-9, ...)
+    assert float(jax_val["max_rel_error"]) < 1e-13
+    assert float(by["jax closed form, clipped x in (1, 1.5], value"]["max_rel_error"]) < 1e-13
+    assert "gradients finite at all 64 points (x = 1 included): True" in text
