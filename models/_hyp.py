@@ -122,7 +122,8 @@ def _lambda_tables(kmax: int) -> np.ndarray:
 
 # [i, r]: coefficient of eps^(K-1-i) in row r (Horner order); rows selected by masks
 # because a per-point gather is slow under the batched tangents
-_LAMBDA_REV = jnp.asarray(_lambda_tables(_K_TAYLOR)[:, ::-1].T.copy())
+# numpy, not jnp: building a device array at import would initialise the JAX backend
+_LAMBDA_REV = np.ascontiguousarray(_lambda_tables(_K_TAYLOR)[:, ::-1].T)
 
 
 def _exprel(q: jnp.ndarray) -> jnp.ndarray:
@@ -184,8 +185,10 @@ def _connection_branch(x: jnp.ndarray, m: jnp.ndarray, clipped: jnp.ndarray) -> 
     sel = [clipped == bool(r // 3) for r in range(6)]
     sel = [sel[r] & (n_int == r % 3 + 1.0) for r in range(6)]
 
+    table = jnp.asarray(_LAMBDA_REV)
+
     def horner(i, acc):
-        coef = _LAMBDA_REV[i]
+        coef = table[i]
         c_i = coef[0]
         for r in range(1, 6):
             c_i = jnp.where(sel[r], coef[r], c_i)

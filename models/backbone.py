@@ -242,8 +242,7 @@ def backbone_shift(x: ArrayLike, n: ArrayLike = 1.5, *, nodes: int = _N_NODES) -
     orbit leaves contact for x above about 1). Differentiable in x and n (custom JVP:
     implicit function theorem through the amplitude root solve).
     """
-    x = jnp.asarray(x, dtype=float)
-    n = jnp.broadcast_to(jnp.asarray(n, dtype=float), x.shape)
+    x, n = jnp.broadcast_arrays(jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float))
     safe_x = jnp.where(x > 1e-8, x, 1e-2)
     out = jax.vmap(lambda a, b: _backbone_scalar(a, b, nodes))(safe_x.ravel(), n.ravel())
     return jnp.where(x > 1e-8, out.reshape(x.shape), 0.0)

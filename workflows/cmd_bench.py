@@ -20,6 +20,9 @@ BENCHES: dict[str, str] = {
 
 
 def _run(args: argparse.Namespace) -> int:
+    from inference.sample import configure
+
+    configure(4)  # parallel chains: must precede anything that starts the JAX backend
     module = importlib.import_module(BENCHES[args.which])
     md = module.run(Path(args.out), quick=args.quick)
     if not args.quiet:

@@ -53,7 +53,7 @@ def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str
 
     shared, split = runs["viscoelastic"], runs["viscoelastic_split"]
     rung = shared.summary["rung"]
-    lik = "studentt" if cfg["likelihood"]["robust"] else "normal"
+    lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
     log.info("tension: eta from the shift alone and from Q alone (rung %s)", rung)
     single = _single_source_fits(inputs, cfg, rung, lik)
     eta_joint = np.asarray(shared.idata.posterior["eta"]).ravel()

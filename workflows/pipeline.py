@@ -229,7 +229,7 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     ds = load_data(cfg)
     inputs = model_inputs(ds)
     names = law_names if law_names is not None else cfg["laws"]
-    specs = comparison_specs(names, cfg["rung"], "studentt" if cfg["likelihood"]["robust"]
+    specs = comparison_specs(names, cfg["rung"], "student_t" if cfg["likelihood"]["robust"]
                              else "normal")
     runs: dict[str, LawRun] = {}
     for name, spec in specs.items():

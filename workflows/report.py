@@ -24,8 +24,8 @@ from typing import Any
 
 from workflows._io import write_text
 
-__all__ = ["render_report", "comparison_table", "report_blocks", "blocks_to_markdown",
-           "blocks_to_html", "tension_paragraph"]
+__all__ = ["render_report", "comparison_table", "markdown_table", "report_blocks",
+           "blocks_to_markdown", "blocks_to_html", "tension_paragraph"]
 
 _DASH = "—"
 _FAILED = "FAILED"
@@ -382,6 +382,9 @@ def _md_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
              "|" + "|".join("---" for _ in headers) + "|"]
     lines += ["| " + " | ".join(_md_cell(c) for c in row) + " |" for row in body]
     return "\n".join(lines)
+
+
+markdown_table = _md_table  # public: benchmarks format their tables the same way
 
 
 def blocks_to_markdown(blocks: Sequence[Block]) -> str:
