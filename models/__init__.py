@@ -9,6 +9,7 @@ contact law or rung, e.g. ``from models import hertz, shift, backbone``;
 from . import (
     adhesion,
     backbone,
+    backbone_table,
     dmt,
     hbm,
     hertz,
@@ -22,6 +23,7 @@ from . import (
     rod,
     scenes,
     shift,
+    simulate,
     timeint,
     viscoelastic,
 )
@@ -29,6 +31,7 @@ from . import (
 __all__ = [
     "adhesion",
     "backbone",
+    "backbone_table",
     "dmt",
     "hbm",
     "hertz",
@@ -42,6 +45,7 @@ __all__ = [
     "rod",
     "scenes",
     "shift",
+    "simulate",
     "timeint",
     "viscoelastic",
 ]

@@ -124,7 +124,6 @@ def rod_modes(f_rod: float, n: int, *, dispersion_scene: Scene | None = None,
     s = dispersion_scene
     m = s.rod_material
     kw = {"young": m.young, "poisson": m.poisson, "density": m.density, "radius": s.rod_radius}
-    c0 = float(rod.bar_velocity(m.young, m.density))
     vt = float(np.sqrt(m.young / (2 * (1 + m.poisson)) / m.density))
     f_top = 0.95 * rod.OMEGA_MAX * vt / (2 * np.pi * s.rod_radius)
     length = float(rod.first_branch_phase_velocity(f_rod, **kw)) / (4 * f_rod) if measured \
@@ -137,7 +136,6 @@ def rod_modes(f_rod: float, n: int, *, dispersion_scene: Scene | None = None,
             fj = min((2 * j + 1) * float(rod.first_branch_phase_velocity(fj, **kw))
                      / (4 * length), f_top)
         f[j] = fj
-    del c0
     return f
 
 
@@ -185,7 +183,11 @@ def _peak_path(dyn, amps, om0, e0, h, n, bead=True):
         rx = jax.jacfwd(res)(x, om)
         ro = jax.jacfwd(res, argnums=1)(x, om)
         ga, go = jax.grad(amp, argnums=(0, 1))(x, om, e)
-        peak = jnp.linalg.det(rx) * (go - jnp.dot(ga, jnp.linalg.solve(rx, ro)))
+        # det(R_X) keeps the condition finite at folds; dividing by the (off-resonant)
+        # mean and higher-harmonic block keeps it O(1) whatever H
+        sub = np.r_[0, 3:2 * h + 1]
+        scale = jnp.linalg.det(rx[np.ix_(sub, sub)]) if h > 1 else rx[0, 0]
+        peak = jnp.linalg.det(rx) / scale * (go - jnp.dot(ga, jnp.linalg.solve(rx, ro)))
         return jnp.concatenate([res(x, om), peak[None], (amp(x, om, e) - a)[None]])
 
     z0 = jnp.zeros(2 * h + 3).at[1].set(amps[0]).at[-2].set(om0).at[-1].set(e0 * amps[0])
@@ -327,27 +329,39 @@ class Simulator:
         if d.rho.shape[0]:
             r2, mu = float(d.rho[0]) ** 2, float(d.mu)
             b = 1 + mu + r2
-            om0 = math.sqrt((b - math.sqrt(b * b - 4 * r2)) / 2)
+            dsc = math.sqrt(b * b - 4 * r2)
+            roots = np.sqrt([(b - dsc) / 2, (b + dsc) / 2])
+            om0 = float(roots[np.argmin(np.abs(roots - 1.0))])   # the contact's branch
         e0 = float(jax.grad(lambda v: d.law.force(1.0, v))(0.0) / d.law.slope)
         om, e, x, ok = _peak_path(d, jnp.asarray(amps_rel, float), om0, max(e0, 1e-6),
                                   self.harmonics, self.n_time, bead)
         return np.asarray(om), np.asarray(e), np.asarray(x), np.asarray(ok)
 
+    def peak(self, amplitude: float, *, bead: bool = True, steps: int = 12) -> dict:
+        """Harmonic-balance resonance peak whose first-harmonic amplitude (the bead's, else
+        the overlap's) is ``amplitude`` [m], by continuation in amplitude from a = 1e-3
+        delta0 in ``steps`` steps: shift (Delta f/f0 against the peak at 1e-3 delta0),
+        frequency [Hz], base displacement [m], and the smallest overlap over the cycle
+        over delta0 (<= 0: the contact opens, the unilateral clip acts)."""
+        ai = float(amplitude) / self.delta0
+        path = np.concatenate([[_A_REF], np.linspace(ai / steps, ai, steps)])
+        with jax.enable_x64(True):
+            om, e, x, ok = self._peaks(path, bead)
+        if not ok.all():
+            raise RuntimeError(f"{self.scene.name}: peak continuation failed at "
+                               f"a = {path[~ok][0]:.3g} delta0")
+        self._check_plastic(ai * self.delta0)
+        th = 2 * np.pi * np.arange(512) / 512
+        k = np.arange(1, self.harmonics + 1)
+        q = x[-1, 0] + np.cos(np.outer(th, k)) @ x[-1, 1::2] + np.sin(np.outer(th, k)) @ x[-1, 2::2]
+        return {"shift": float(om[-1] / om[0] - 1.0), "frequency_Hz": float(om[-1] * self.f0),
+                "base_displacement_m": float(e[-1] * self.delta0),
+                "min_overlap": float(1.0 + q.min())}
+
     def shift_at(self, amplitudes, *, bead: bool = True, steps: int = 12) -> np.ndarray:
-        """Delta f/f0 of the harmonic-balance resonance peak whose first-harmonic amplitude
-        (bead's, else the overlap's) is ``amplitudes`` [m], against the peak at
-        a = 1e-3 delta0; continuation in amplitude from there in ``steps`` steps."""
-        a = np.atleast_1d(np.asarray(amplitudes, float)) / self.delta0
-        out = []
-        for ai in a:
-            path = np.concatenate([[_A_REF], np.linspace(ai / steps, ai, steps)])
-            om, _, _, ok = self._peaks(path, bead)
-            if not ok.all():
-                raise RuntimeError(f"{self.scene.name}: peak continuation failed at "
-                                   f"a = {path[~ok][0]:.3g} delta0")
-            self._check_plastic(ai * self.delta0)
-            out.append(om[-1] / om[0] - 1.0)
-        return np.asarray(out)
+        """Delta f/f0 of the resonance peak at each amplitude [m] (see :meth:`peak`)."""
+        return np.asarray([self.peak(a, bead=bead, steps=steps)["shift"]
+                           for a in np.atleast_1d(np.asarray(amplitudes, float))])
 
     def _check_plastic(self, amp_m: float) -> None:
         if "plasticity" not in self.built or self.scene.yield_strength is None:
@@ -460,8 +474,8 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
         if name not in EFFECT_NAMES:
             raise ValueError(f"unknown effect '{name}' (effects: {', '.join(EFFECT_NAMES)})")
     built = (built | set(include or ())) - set(exclude or ())
-    if scene.yield_strength is not None:
-        built.add("plasticity") if "plasticity" not in set(exclude or ()) else None
+    if scene.yield_strength is not None and "plasticity" not in set(exclude or ()):
+        built.add("plasticity")     # a check, not a cost: always on where Y is known
     notes = []
     if "plasticity" in built and plan.effect("plasticity").included:
         raise PlasticityError(f"scene '{scene.name}': {plan.effect('plasticity').reason}")
@@ -470,16 +484,15 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
             built.discard(dep)
             notes.append(f"{dep} needs the rod: not built")
 
-    law = plan.contact_law if "adhesion" in built else "Hertz"
-    if law == "Maugis-Dugdale":
+    law_sim = plan.contact_law if "adhesion" in built else "Hertz"
+    if law_sim == "Hertz" and "adhesion" in built:
+        # the map picked Hertz; adding adhesion means the law the plan checked against
+        law_sim = plan.effect("adhesion").details["alternatives"][0]
+    if law_sim == "Maugis-Dugdale":
         law_sim = "JKR"
         notes.append("Maugis-Dugdale selected by the adhesion map: simulated with the plan's "
                      "bracket law JKR (no Maugis-Dugdale force implemented); the plan's "
                      "adhesion bound brackets it by DMT")
-    elif law == "Hertz" and plan.contact_law != "Hertz" and "adhesion" not in built:
-        law_sim = "Hertz"
-    else:
-        law_sim = law
     d0, k0 = _lin(scene, law_sim)
     m, f_load = scene.mass, scene.load
     omega0 = math.sqrt(k0 / m)
@@ -512,8 +525,13 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
         contact = CustomLaw(_jkr_g if law_sim == "JKR" else _dmt_g, p, s, zeta=0.5 * aw)
 
     method = "time-integration" if "contact_loss" in built else "harmonic-balance"
-    h = harmonics or (max(plan.harmonics, 3 if plan.harmonics == 1 else 1)
-                      if "harmonics" in built else 1)
+    if harmonics is not None:
+        h = int(harmonics)
+        built = built | {"harmonics"} if h > 1 else built - {"harmonics"}
+    elif "harmonics" in built:
+        h = plan.harmonics if plan.harmonics > 1 else 3
+    else:
+        h = 1
     if "rod" in built:
         measured = scene.rod_first_resonance is not None
         f_rod = scene.rod_first_resonance if measured else float(rod.first_resonance_fixed_free(

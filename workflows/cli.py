@@ -18,6 +18,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "workflows.cmd_scene",
     "workflows.cmd_shift",
     "workflows.cmd_plan",
+    "workflows.cmd_run_scene",
     "workflows.cmd_simulate",
     "workflows.cmd_validate",
     "workflows.cmd_bench",

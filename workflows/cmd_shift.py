@@ -45,8 +45,14 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None, scene
 
 
 def _run(args: argparse.Namespace) -> int:
-    table = shift_table(args.law, args.x, method=args.method, n=args.n, scene_path=args.scene,
-                        builtin=args.builtin, young=args.young, eta=args.eta)
+    from .cli import UserError
+
+    try:
+        table = shift_table(args.law, args.x, method=args.method, n=args.n,
+                            scene_path=args.scene, builtin=args.builtin, young=args.young,
+                            eta=args.eta)
+    except ValueError as exc:  # a law/method/parameter combination that does not exist
+        raise UserError(str(exc)) from exc
     if args.json:
         print(json.dumps(table, indent=2))
         return 0

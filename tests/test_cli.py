@@ -1,0 +1,150 @@
+"""Every ``beadrod`` subcommand once, with tiny counts, and the files it promises.
+
+The numbers of these runs mean nothing (a few draws); what is checked is that
+each command runs on a fresh checkout and that its outputs exist and are well
+formed: InferenceData reloads with arviz, tables parse, the HTML report embeds
+its images instead of referencing files.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from io import StringIO
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from workflows.cli import COMMAND_MODULES, build_parser, main
+
+TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--live-points", "30",
+        "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet"]
+
+
+def _subcommands() -> list[str]:
+    parser = build_parser()
+    action = next(a for a in parser._actions if a.dest == "command")
+    return sorted(action.choices)
+
+
+def test_every_subcommand_has_help(capsys):
+    names = _subcommands()
+    assert {"compare", "fit", "scene", "shift", "plan", "simulate", "validate", "bench"} <= set(names)
+    assert len(COMMAND_MODULES) >= 7
+    for name in names:
+        with pytest.raises(SystemExit) as exc:
+            main([name, "--help"])
+        assert exc.value.code == 0
+        assert "usage: beadrod" in capsys.readouterr().out
+
+
+def test_scene_shift_plan_json(capsys):
+    assert main(["scene", "--json"]) == 0
+    scene = json.loads(capsys.readouterr().out)
+    assert any(k.endswith("_Hz") or k.endswith("_m") for k in json.dumps(scene).split('"'))
+    assert main(["shift", "--law", "hertz", "--x", "0.5", "1.0", "--json"]) == 0
+    sh = json.loads(capsys.readouterr().out)
+    # paper: Hertz first order at x = 1 is about -0.05 (exactly sqrt(2)/pi - 1/2)
+    assert sh["delta_f_over_f0"][1] == pytest.approx(2**0.5 / 3.141592653589793 - 0.5, rel=1e-12)
+    assert main(["shift", "--law", "hertz", "--x", "0.5", "--method", "backbone", "--json"]) == 0
+    bb = json.loads(capsys.readouterr().out)
+    assert bb["delta_f_over_f0"][0] < sh["delta_f_over_f0"][0] < 0  # exact softens more
+    assert main(["plan", "--builtin", "paper", "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)
+    assert plan["effects"]
+
+
+def test_shift_rejects_law_without_backbone(capsys):
+    assert main(["shift", "--law", "jkr", "--x", "0.5", "--method", "backbone"]) == 2
+    assert "no backbone" in capsys.readouterr().err
+
+
+def test_validate_and_bad_data_exit_code(tmp_path, capsys):
+    assert main(["validate", str(Path(__file__).parents[1] / "data" / "paper_like")]) == 0
+    assert "protocols: 28" in capsys.readouterr().out
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "measurements.csv").write_text("protocol,step\nP1,1\n")
+    (bad / "scene.toml").write_text(
+        (Path(__file__).parents[1] / "data" / "paper_like" / "scene.toml").read_text())
+    assert main(["validate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "measurements.csv" in err and "column" in err
+
+
+def test_simulate_writes_a_loadable_dataset(tmp_path):
+    out = tmp_path / "world"
+    assert main(["simulate", "--world", "paper_like", "--out", str(out), "--seed", "3"]) == 0
+    assert {"measurements.csv", "scene.toml", "truth.json"} <= {p.name for p in out.iterdir()}
+    assert main(["validate", str(out)]) == 0
+
+
+@pytest.mark.parametrize("which", ["physics", pytest.param("inference", marks=pytest.mark.slow)])
+def test_bench_quick(tmp_path, which):
+    assert main(["bench", which, "--quick", "--quiet", "--out", str(tmp_path)]) == 0
+    md = next(tmp_path.glob("*.md")).read_text()
+    assert "|" in md
+    csv = next(tmp_path.glob("*.csv"))
+    assert len(pd.read_csv(csv)) >= 1
+
+
+@pytest.fixture(scope="module")
+def compare_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("compare")
+    rc = main(["compare", "--out", str(out), "--force",
+               "--laws", "hertz,viscoelastic,viscoelastic_split", *TINY])
+    assert rc == 0
+    return out
+
+
+@pytest.mark.slow  # not yet verified within the CI budget (see issue notes)
+def test_compare_outputs_exist_and_parse(compare_run):
+    import arviz as az
+
+    out = compare_run
+    for name in ("comparison.md", "comparison.csv", "report.md", "report.html", "result.json",
+                 "config.resolved.toml", "beadrod.log"):
+        assert (out / name).is_file(), name
+    table = pd.read_csv(out / "comparison.csv")
+    assert set(table["law"]) == {"hertz", "viscoelastic", "viscoelastic_split"}
+    for nc in (out / "idata").glob("*.nc"):
+        idata = az.from_netcdf(nc)
+        assert {"posterior", "log_likelihood", "observed_data", "sample_stats"} <= set(
+            idata.groups())
+    result = json.loads((out / "result.json").read_text())
+    assert result["tension"] is not None and "paragraph" in result["tension"]
+    assert result["data"]["hash"] and len(result["laws"]) == 3
+    assert not list(out.rglob("*.part*")), "temporary files left behind"
+
+
+@pytest.mark.slow  # not yet verified within the CI budget (see issue notes)
+def test_compare_html_embeds_every_image(compare_run):
+    html = (compare_run / "report.html").read_text()
+    refs = re.findall(r'(?:src|href)="([^"]+)"', html)
+    assert refs, "the report has no images"
+    assert all(r.startswith("data:") or r.startswith("#") for r in refs), refs
+
+
+@pytest.mark.slow  # not yet verified within the CI budget (see issue notes)
+def test_compare_refuses_to_overwrite_and_resumes(compare_run, capsys):
+    out = compare_run
+    assert main(["compare", "--out", str(out), "--laws", "hertz", *TINY]) == 2
+    assert "--force" in capsys.readouterr().err
+    before = (out / "laws" / "hertz.json").stat().st_mtime_ns
+    assert main(["compare", "--out", str(out), "--resume", "--laws", "hertz", *TINY]) == 0
+    assert (out / "laws" / "hertz.json").stat().st_mtime_ns == before  # reused, not refitted
+
+
+@pytest.mark.slow  # not yet verified within the CI budget (see issue notes)
+def test_fit_one_law(tmp_path):
+    assert main(["fit", "--law", "hertz", "--out", str(tmp_path / "fit"), *TINY]) == 0
+    table = pd.read_csv(StringIO((tmp_path / "fit" / "comparison.csv").read_text()))
+    assert list(table["law"]) == ["hertz"]
+
+
+def test_config_file_and_bad_key(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[samplng]\nchains = 2\n")
+    assert main(["fit", "--law", "hertz", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    assert "did you mean 'sampling'" in capsys.readouterr().err
