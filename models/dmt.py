@@ -18,12 +18,14 @@ therefore jumps by Fc at delta = 0, the DMT snap).
 
 from __future__ import annotations
 
+import sys
+
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
 from . import hertz
 from ._math import safe_pow, safe_sqrt
-from .shift import first_order_from_stiffness
+from .shift import first_order_adhesive
 
 __all__ = [
     "pull_off_force",
@@ -145,15 +147,8 @@ def shift_first_order(
     With x normalised by the DMT delta0 this is exactly the Hertz first-order shift (the
     stiffness is Hertz's); computed by quadrature through models.shift for uniformity.
     """
-    delta0 = static_overlap(load, e_star=e_star, radius=radius, gamma=gamma)
-    k0 = linear_stiffness(load, e_star=e_star, radius=radius, gamma=gamma)
-    x = jnp.asarray(x)
-    x_own = x if reference_overlap is None else x * reference_overlap / delta0
-
-    def k_fn(d):
-        return stiffness(d, e_star=e_star, radius=radius, gamma=gamma)
-
-    return first_order_from_stiffness(k_fn, delta0, x_own, k0=k0)
+    return first_order_adhesive(sys.modules[__name__], x, load=load, e_star=e_star,
+                                radius=radius, gamma=gamma, reference_overlap=reference_overlap)
 
 
 def overlap_from_frequency(

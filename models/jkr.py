@@ -29,12 +29,14 @@ function theorem (custom_jvp), never by differentiating through the iterations.
 
 from __future__ import annotations
 
+import sys
+
 import jax
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
 from ._math import safe_pow, safe_sqrt
-from .shift import first_order_from_stiffness
+from .shift import first_order_adhesive
 
 __all__ = [
     "pull_off_force",
@@ -224,18 +226,11 @@ def shift_first_order(
 
     delta0 is the JKR static overlap. x = delta_a / delta_ref where delta_ref defaults to
     that delta0; pass ``reference_overlap`` (e.g. the Hertz delta0, as the paper's Fig. 4
-    does) to use another normalisation. Quadrature by models.shift.first_order_from_stiffness
+    does) to use another normalisation. Quadrature by models.shift.first_order_adhesive
     (which clips K to 0 where delta <= 0, i.e. for x_jkr > 1 only).
     """
-    delta0 = static_overlap(load, e_star=e_star, radius=radius, gamma=gamma)
-    k0 = linear_stiffness(load, e_star=e_star, radius=radius, gamma=gamma)
-    x = jnp.asarray(x)
-    x_own = x if reference_overlap is None else x * reference_overlap / delta0
-
-    def k_fn(d):
-        return stiffness(d, e_star=e_star, radius=radius, gamma=gamma)
-
-    return first_order_from_stiffness(k_fn, delta0, x_own, k0=k0)
+    return first_order_adhesive(sys.modules[__name__], x, load=load, e_star=e_star,
+                                radius=radius, gamma=gamma, reference_overlap=reference_overlap)
 
 
 def modulus_from_frequency(

@@ -26,6 +26,7 @@ Units: every shift is the dimensionless Delta f/f0 [-]; x [-].
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -35,6 +36,7 @@ from jax.typing import ArrayLike
 from ._hyp import NEG_INF_GRAD, mean_power_at_one, mean_power_clipped
 
 __all__ = [
+    "first_order_adhesive",
     "first_order_powerlaw",
     "first_order_hertz",
     "first_order_from_stiffness",
@@ -162,6 +164,24 @@ def first_order_from_stiffness(
     weights = jnp.asarray(w).reshape((-1,) + (1,) * x.ndim)
     mean = phi0 / jnp.pi * jnp.sum(weights * k_nodes, axis=0)
     return mean / (2.0 * k0) - 0.5
+
+
+def first_order_adhesive(
+    module: Any, x: ArrayLike, *, load: ArrayLike, e_star: ArrayLike, radius: ArrayLike,
+    gamma: ArrayLike, reference_overlap: ArrayLike | None = None,
+) -> jnp.ndarray:
+    """First-order Delta f/f0 of an adhesive law (``models.jkr`` or ``models.dmt``) [-].
+
+    x = delta_a/delta_ref, delta_ref the law's own static overlap unless
+    ``reference_overlap`` is given (the paper's Fig. 4 normalises by the Hertz delta0);
+    quadrature by :func:`first_order_from_stiffness`.
+    """
+    kw = {"e_star": e_star, "radius": radius, "gamma": gamma}
+    delta0 = module.static_overlap(load, **kw)
+    k0 = module.linear_stiffness(load, **kw)
+    x = jnp.asarray(x)
+    x_own = x if reference_overlap is None else x * reference_overlap / delta0
+    return first_order_from_stiffness(lambda d: module.stiffness(d, **kw), delta0, x_own, k0=k0)
 
 
 def without_first_order(mean_ratio: ArrayLike) -> jnp.ndarray:
