@@ -19,14 +19,17 @@ from .numpyro_models import (
     LAWS,
     RUNGS,
     ForwardModelUnavailable,
+    MeasuredF0,
     ModelSpec,
     build_model,
+    curve_draws,
     paper_spec,
 )
 from .sample import FitResult, configure, load_idata, run_nuts, save_idata
 
 __all__ = [
     "LAWS", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",
+    "MeasuredF0", "curve_draws",
     "model_inputs", "design_inputs", "simulate", "without_observations",
     "configure", "run_nuts", "FitResult", "save_idata", "load_idata",
     "check", "Verdict", "DiagnosticsFailed", "loo_report",

@@ -56,8 +56,21 @@ class Verdict:
         return head if self.passed else head + "\n  - " + "\n  - ".join(self.failures)
 
 
-def _min_over_vars(ds) -> float:
-    vals = [np.asarray(ds[v]).ravel() for v in ds.data_vars]
+def _varying(post, var_names) -> dict[str, np.ndarray]:
+    """Per variable, the mask of elements that vary over the draws (a constant element,
+    e.g. a deterministic fixed by the data, has undefined R-hat and ESS)."""
+    out = {}
+    for v in var_names:
+        a = np.asarray(post[v], float)
+        # relative: rounding jitter (1e-16) of a data-fixed deterministic is "constant"
+        scale = np.abs(a).mean(axis=(0, 1)) + 1e-300
+        out[v] = (a.std(axis=(0, 1)) > 1e-10 * scale).ravel()
+    return out
+
+
+def _min_over_vars(ds, masks=None) -> float:
+    vals = [np.asarray(ds[v]).ravel()[masks[v]] if masks else np.asarray(ds[v]).ravel()
+            for v in ds.data_vars]
     vals = np.concatenate(vals) if vals else np.array([np.nan])
     return float(np.nanmin(vals)) if np.any(np.isfinite(vals)) else float("nan")
 
@@ -68,19 +81,20 @@ def check(idata: az.InferenceData, *, rhat_max: float = 1.01, ess_min: float = 4
     """Apply the gate to ``idata`` (posterior + sample_stats); mark and warn on failure.
 
     R-hat and ESS are taken over every posterior variable (deterministics included,
-    except constant ones whose R-hat is undefined). NaN R-hat counts as a failure.
+    except constant elements, whose R-hat is undefined: e.g. the up-sweep predictions
+    of a law with no shape parameter). NaN R-hat counts as a failure.
     """
     post = idata.posterior
     if var_names is None:
-        var_names = [v for v in post.data_vars
-                     if float(np.nanstd(np.asarray(post[v]))) > 0.0]
+        var_names = [v for v, m in _varying(post, list(post.data_vars)).items() if m.any()]
     rhat = az.rhat(idata, var_names=var_names)
     ess_b = az.ess(idata, var_names=var_names, method="bulk")
     ess_t = az.ess(idata, var_names=var_names, method="tail")
-    r_all = np.concatenate([np.asarray(rhat[v]).ravel() for v in rhat.data_vars])
+    masks = _varying(post, var_names)
+    r_all = np.concatenate([np.asarray(rhat[v]).ravel()[masks[v]] for v in rhat.data_vars])
     r_max = float(np.max(r_all)) if np.all(np.isfinite(r_all)) else float("nan")
-    eb = _min_over_vars(ess_b)
-    et = _min_over_vars(ess_t)
+    eb = _min_over_vars(ess_b, masks)
+    et = _min_over_vars(ess_t, masks)
     ss = idata.sample_stats
     div = int(np.asarray(ss["diverging"]).sum()) if "diverging" in ss else 0
     bfmi = float(np.min(az.bfmi(idata))) if "energy" in ss else float("nan")

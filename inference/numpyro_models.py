@@ -4,31 +4,59 @@ Structure shared by every law (names are the sample sites):
 
 * Global law parameters (``young``, ``eta``, ``n``, ``gamma``, ...; priors in
   :mod:`inference.priors`).
-* Per-protocol static overlap, hierarchical in log around the law's static overlap
-  under the bead's weight, delta0_ref:
-  ``log delta0_p ~ Normal(log delta0_ref, delta0_scatter)`` (site ``delta0_log``).
-* The measured linear resonance of each protocol ties delta0_p to the law through its
-  tangent stiffness: ``f0_obs_p ~ Normal(sqrt(K_law(delta0_p)/m) / 2 pi, f0_sd)`` with a
-  known measurement sd ``ModelSpec.f0_sd`` (default 5 Hz: peak-picking repeatability of
-  a low-amplitude sweep at 2.7 kHz). All f0 scatter beyond it is delta0 scatter.
+* The static overlap of each protocol is fixed by its measured linear resonance f0_p:
+  at the known load F0 (the bead's weight) the law's tangent stiffness gives
+  ``delta0_p = delta0(f0_p; theta)`` (models.hertz / powerlaw / jkr
+  ``overlap_from_frequency``: 3 F0/(2 m omega0^2) for Hertz and viscoelastic,
+  n F0/(m omega0^2) for the power law, the JKR state at (F0, gamma) for JKR). What
+  scatters between protocols (remounting) is the contact's stiffness scale (local
+  curvature, E* sqrt(R)), not the load. ``delta0`` is a deterministic site.
+* The hierarchical statement ``log delta0_p ~ Normal(log delta0_ref(theta), delta0_scatter)``
+  (delta0_ref: the law's overlap under the weight at nominal R) becomes the density of
+  the measured f0 (site ``f0_obs``, :class:`MeasuredF0`):
+
+      p(f0_p | theta) = Normal(log delta0(f0_p; theta); log delta0_ref(theta), scatter)
+                        * |d log delta0(f0_p; theta) / d f0_p|,
+
+  the Jacobian computed by forward-mode autodiff of the forward map, elementwise. For
+  every law here delta0 ~ f0^-2 at fixed load (JKR too: at fixed F0 and gamma,
+  a ~ E*^(-1/3) and delta ~ E*^(-2/3) ~ f0^-2), so the Jacobian is 2/f0 and
+  theta-independent, but it is not hard-coded. Every model's evidence is therefore a
+  density of the same observed variables (f0 [Hz], shift, Q), comparable with the
+  law-free baseline's f0 ~ Normal(mu_f0, tau_f0) [Hz].
+  This is the sigma_f0 -> 0 limit of a latent-overlap model with f0_obs ~
+  Normal(f0(delta0_p), sigma_f0). The neglected measurement noise, ``ModelSpec.f0_sd``
+  (5 Hz: peak-picking repeatability of a low-amplitude sweep at 2.7 kHz), is 0.2 % of
+  f0, i.e. 0.004 in log delta0, against a fitted scatter of ~0.1 (f0 scatters by
+  ~150 Hz over protocols): it changes the f0 variance budget by ~0.1 % and x by 0.4 %.
+  Removing those 28 latent dimensions is what makes NUTS and nested sampling cheap.
 * Drive sweeps: x_i = delta_a,i / delta0_p(i); the rung gives Delta f/f0(x_i) and
   ``shift_obs_i ~ Normal|StudentT(shift(x_i) + offset_down * direction_i, sigma_shift)``.
   Up and down sweeps share one curve; down sweeps (direction = 1) get one extra offset
   (the delayed jump of a softening resonance biases their peak low).
 * Reference Q where the protocol has one: the viscoelastic law predicts
-  Q_p = 1/(omega0_p A(eta, E)) and ``q_obs ~ LogNormal(log Q_p, sigma_logq)``; laws that
-  predict no Q get a law-free nuisance model log Q ~ Normal(mu_logq, tau_logq), so every
-  model describes the same data and evidences are comparable.
+  Q_p = 1/(omega0_p A(eta, E)) with the measured omega0_p = 2 pi f0_p and
+  ``q_obs ~ LogNormal(log Q_p, sigma_logq)``; laws that predict no Q get a law-free
+  nuisance model log Q ~ Normal(mu_logq, tau_logq), so every model describes the same
+  data and evidences are comparable.
 
 Rungs (``ModelSpec.rung``):
   'first_order'  paper's averaged tangent stiffness: models.shift.first_order_hertz /
                  first_order_powerlaw; for viscoelastic the correct law
                  models.viscoelastic.shift_first_order (damping does not enter);
-                 for JKR models.jkr.shift_first_order.
+                 for JKR models.jkr.shift_first_order through its table
+                 models.jkr_table.shift_first_order_fast: the curve in x = delta_a/delta0
+                 (delta0 the JKR overlap implied by f0_p) depends on F0/Fc = F0/(3 pi
+                 gamma R) alone, so E* drops out (error <= 2e-7, tests/test_jkr_table.py).
   'paper_eq25'   viscoelastic only: models.viscoelastic.shift_paper_eq25 (the paper's
                  curve, secant-slope artefact included; eta enters the shift).
-  'backbone'     exact conservative backbone models.backbone.backbone_shift(x, n)
-                 (power laws: Hertz, viscoelastic at n = 3/2, power law at n).
+  'backbone'     exact conservative backbone of F ~ delta^n (Hertz, viscoelastic at
+                 n = 3/2, power law at n): models.backbone_table.backbone_shift_fast
+                 (tabulated, x in [0, 2], n in [1, 3]) when that module and its table
+                 exist, else the quadrature models.backbone.backbone_shift. x is clipped
+                 to the table's [0, 2]: beyond it (delta_a > 2 delta0, only for absurd
+                 parameters) the curve is held at its x = 2 value, the misfit is left to
+                 the likelihood, and no NaN reaches the sampler.
 
 The law-free ``baseline``: Delta f/f0 = -amp * xs^power with xs = delta_a omega0_p^2 / g
 (the overlap scale g/omega0^2 of a linear spring; any other scale is absorbed into amp),
@@ -46,8 +74,11 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import numpyro
 import numpyro.distributions as dist
+from numpyro.distributions import constraints
+from numpyro.distributions.util import promote_shapes
 
 from models import hertz, materials, powerlaw
 
@@ -55,10 +86,13 @@ from .likelihood import observe_logq, observe_shift
 from .priors import prior
 
 __all__ = ["LAWS", "RUNGS", "ModelSpec", "ForwardModelUnavailable", "build_model",
-           "paper_spec", "shift_forward", "check_backbone"]
+           "paper_spec", "shift_forward", "check_backbone", "MeasuredF0", "log_overlap",
+           "curve_draws", "backbone_function"]
 
 LAWS = ("hertz", "powerlaw", "viscoelastic", "jkr", "baseline")
 RUNGS = ("first_order", "paper_eq25", "backbone")
+# domain of models.backbone_table.backbone_shift_fast
+BACKBONE_X_MAX = 2.0
 
 
 class ForwardModelUnavailable(RuntimeError):
@@ -67,7 +101,12 @@ class ForwardModelUnavailable(RuntimeError):
 
 @dataclass(frozen=True)
 class ModelSpec:
-    """What to build. ``eta_mode`` 'split' gives eta_shift (shift) and eta_q (Q)."""
+    """What to build. ``eta_mode`` 'split' gives eta_shift (shift) and eta_q (Q).
+
+    ``f0_sd`` [Hz] is the measurement noise of f0 that the exact conditioning on f0
+    neglects (documented, not used by the likelihood); ``use_f0=False`` conditions on
+    the measured f0 without its density (evidences are then not comparable).
+    """
 
     law: str = "hertz"
     rung: str = "first_order"
@@ -128,6 +167,28 @@ def _function(module: str, name: str) -> Callable:
     return fn
 
 
+@functools.lru_cache(maxsize=1)
+def _fast_backbone() -> tuple[Callable, float] | None:
+    try:
+        mod = importlib.import_module("models.backbone_table")
+        fn = mod.backbone_shift_fast
+        if bool(jnp.all(jnp.isfinite(fn(jnp.array([0.1, 1.0]), 1.5)))):  # table readable
+            return fn, float(getattr(mod, "X_MAX", BACKBONE_X_MAX))
+    except Exception:  # noqa: BLE001  (absent module or table: the exact rung is used)
+        pass
+    return None
+
+
+def backbone_function() -> tuple[Callable, bool]:
+    """(backbone shift function (x, n), is_fast): the tabulated
+    models.backbone_table.backbone_shift_fast when its module and data exist, else the
+    exact quadrature models.backbone.backbone_shift."""
+    fast = _fast_backbone()
+    if fast is not None:
+        return fast[0], True
+    return _function("backbone", "backbone_shift"), False
+
+
 def shift_forward(spec: ModelSpec, x: jnp.ndarray, *, n=None, damping_constant=None,
                   omega=None, jkr_kw: dict | None = None) -> jnp.ndarray:
     """Delta f/f0 at x for ``spec.law`` on ``spec.rung`` (dispatch only, no physics here)."""
@@ -137,7 +198,11 @@ def shift_forward(spec: ModelSpec, x: jnp.ndarray, *, n=None, damping_constant=N
             raise ForwardModelUnavailable(
                 "no backbone rung for JKR: models.backbone.backbone_shift covers F ~ delta^n")
         exponent = hertz.EXPONENT if law in ("hertz", "viscoelastic") else n
-        return _function("backbone", "backbone_shift")(x, exponent)
+        fn, fast = backbone_function()
+        if fast:
+            # the table covers x in [0, 2]: clip (see module docstring), never NaN
+            x = jnp.clip(x, 0.0, _fast_backbone()[1])
+        return fn(x, exponent)
     if law == "hertz":
         return _function("shift", "first_order_hertz")(x)
     if law == "powerlaw":
@@ -148,38 +213,119 @@ def shift_forward(spec: ModelSpec, x: jnp.ndarray, *, n=None, damping_constant=N
                 x, damping_constant=damping_constant, omega=omega)
         return _function("viscoelastic", "shift_first_order")(x)
     if law == "jkr":
-        return _function("jkr", "shift_first_order")(x, **jkr_kw)
+        # jkr_kw: load [N], radius [m], gamma [J/m^2] (e_star is not needed: the curve in
+        # x depends on F0/Fc alone, models.jkr_table); the table's x range is [0, 2]
+        kw = {k: jkr_kw[k] for k in ("load", "radius", "gamma")}
+        tab = _module("jkr_table")
+        ratio = tab.load_ratio(kw["load"], gamma=kw["gamma"], radius=kw["radius"])
+        return tab.shift_first_order_fast(jnp.clip(x, 0.0, tab.X_MAX), ratio)
     raise ValueError(law)
 
 
 @functools.lru_cache(maxsize=1)
 def check_backbone() -> None:
-    """Probe models.backbone.backbone_shift once: finite values and gradients in x and n
-    where NUTS goes (inside and beyond contact loss), else ForwardModelUnavailable."""
-    fn = _function("backbone", "backbone_shift")
+    """Probe the backbone rung once: finite values and gradients in x and n where NUTS
+    goes (inside and beyond contact loss), else ForwardModelUnavailable."""
+    fn, _ = backbone_function()
+    spec = ModelSpec("powerlaw", rung="backbone")
     x = jnp.array([0.05, 0.5, 0.95, 1.3])
     n = jnp.array([1.2, 1.5, 2.5])
 
     @jax.jit
     def probe(x, n):
-        total = lambda xx, nn: jnp.sum(fn(xx, nn))
-        return jax.vmap(lambda nn: fn(x, nn))(n), jax.grad(total, argnums=(0, 1))(x, n[1])
+        def total(xx, nn):
+            return jnp.sum(shift_forward(spec, xx, n=nn))
+        return (jax.vmap(lambda nn: shift_forward(spec, x, n=nn))(n),
+                jax.grad(total, argnums=(0, 1))(x, n[1]))
 
     val, (gx, gn) = probe(x, n)
     if not (jnp.all(jnp.isfinite(val)) and jnp.all(jnp.isfinite(gx)) and jnp.isfinite(gn)):
         raise ForwardModelUnavailable(
-            f"models.backbone.backbone_shift is not finite/differentiable: values {val}, "
-            f"d/dx {gx}, d/dn {gn}")
+            f"backbone rung {fn.__module__}.{fn.__name__} is not finite/differentiable: "
+            f"values {val}, d/dx {gx}, d/dn {gn}")
 
 
-def _delta0(spec: ModelSpec, ref: jnp.ndarray, n_protocols: int) -> jnp.ndarray:
-    # Centred in log: f0_p pins delta0_p given the law's parameters, so the posterior of
-    # (log E, log delta0_p) is a near-linear ridge (Hertz: delta0_p ~ E^-2 at fixed f0_p)
-    # that a dense mass matrix absorbs; the non-centred form bends it through the scatter.
-    scatter = numpyro.sample("delta0_scatter", prior("delta0_scatter", spec.overrides))
-    with numpyro.plate("protocols", n_protocols):
-        log_d = numpyro.sample("delta0_log", dist.Normal(jnp.log(ref), scatter))
-    return numpyro.deterministic("delta0", jnp.exp(log_d))
+def log_overlap(law: str, f0: jnp.ndarray, *, load: float, mass: float, radius: float,
+                shape: jnp.ndarray | float = 0.0) -> jnp.ndarray:
+    """log delta0 [log m] implied by the measured f0 [Hz] at load F0 [N] for ``law``.
+
+    ``shape`` is the law's shape parameter: n (power law), gamma [J/m^2] (JKR), unused
+    otherwise. Elementwise in f0 (broadcasting with ``shape``).
+    """
+    if law in ("hertz", "viscoelastic"):
+        d = hertz.overlap_from_frequency(f0, load, mass)
+    elif law == "powerlaw":
+        d = powerlaw.overlap_from_frequency(f0, load, mass, shape)
+    elif law == "jkr":
+        d = _module("jkr").overlap_from_frequency(f0, load, mass, radius=radius, gamma=shape)
+    else:
+        raise ValueError(f"no overlap map for law {law!r}")
+    return jnp.log(d)
+
+
+def _log_overlap_and_slope(law, f0, shape, scene):
+    # d log delta0 / d f0 elementwise: one forward-mode pass with unit tangents
+    def fn(f):
+        return log_overlap(law, f, shape=shape, **scene)
+
+    f0 = jnp.asarray(f0, dtype=float)
+    return jax.jvp(fn, (f0,), (jnp.ones_like(f0),))
+
+
+def _invert_log_overlap(law, target, shape, scene, guess: float = 2700.0):
+    """f0 [Hz] with log delta0(f0) = target: Newton in log f0 (exact in one step where
+    delta0 ~ f0^-2, which holds for every law here; three steps guard the general case)."""
+    target = jnp.asarray(target, dtype=float)
+    u = jnp.full(jnp.broadcast_shapes(target.shape, jnp.shape(shape)), np.log(guess))
+
+    def fn(uu):
+        return log_overlap(law, jnp.exp(uu), shape=shape, **scene)
+
+    for _ in range(3):
+        val, slope = jax.jvp(fn, (u,), (jnp.ones_like(u),))
+        u = u - (val - target) / slope
+    return jnp.exp(u)
+
+
+class MeasuredF0(dist.Distribution):
+    """Density of the measured f0 [Hz] when delta0 = delta0(f0; theta) exactly:
+
+        p(f0) = Normal(log delta0(f0); log_ref, scatter) |d log delta0/d f0|.
+
+    Sampling draws log delta0 ~ Normal(log_ref, scatter) and inverts the map.
+    ``law`` is static; the scene is load [N], mass [kg], radius [m].
+    """
+
+    @property
+    def scene(self) -> dict[str, Any]:
+        return {"load": self.load, "mass": self.mass, "radius": self.radius}
+
+    arg_constraints = {"log_ref": constraints.real, "scatter": constraints.positive,
+                       "shape": constraints.real}
+    support = constraints.positive
+    pytree_data_fields = ("log_ref", "scatter", "shape", "load", "mass", "radius")
+    pytree_aux_fields = ("law",)
+
+    def __init__(self, law: str, log_ref, scatter, shape=0.0, *, load: float, mass: float,
+                 radius: float, validate_args=None) -> None:
+        self.law = law
+        # arrays, not floats: the scene may be traced (MCMC with jit_model_args)
+        self.load, self.mass, self.radius = load, mass, radius
+        self.log_ref, self.scatter, self.shape = promote_shapes(
+            jnp.asarray(log_ref, float), jnp.asarray(scatter, float), jnp.asarray(shape, float))
+        batch = jax.lax.broadcast_shapes(jnp.shape(self.log_ref), jnp.shape(self.scatter),
+                                         jnp.shape(self.shape))
+        super().__init__(batch_shape=batch, validate_args=validate_args)
+
+    def sample(self, key, sample_shape=()):
+        shape = sample_shape + self.batch_shape
+        z = self.log_ref + self.scatter * jax.random.normal(key, shape)
+        return _invert_log_overlap(self.law, z, self.shape, self.scene)
+
+    def log_prob(self, value):
+        logd, slope = _log_overlap_and_slope(self.law, value, self.shape, self.scene)
+        return (dist.Normal(self.log_ref, self.scatter).log_prob(logd)
+                + jnp.log(jnp.abs(slope)))
 
 
 def _nuisance_q(spec: ModelSpec, data: dict) -> None:
@@ -190,19 +336,16 @@ def _nuisance_q(spec: ModelSpec, data: dict) -> None:
                  df=spec.student_df)
 
 
-def _observe_f0(spec: ModelSpec, f0_pred: jnp.ndarray, data: dict) -> None:
-    # A known measurement sd, not a free one: a free sd competes with the delta0
-    # scatter for the same f0 spread (a ridge NUTS cannot cross).
-    sigma = spec.f0_sd
-    with numpyro.plate("protocols", f0_pred.shape[0]):
-        numpyro.sample("f0_obs", dist.Normal(f0_pred, sigma), obs=data["f0"])
-
-
 def _observe_drive(spec: ModelSpec, curve: jnp.ndarray, data: dict) -> None:
     offset = numpyro.sample("offset_down", prior("offset_down", spec.overrides))
     sigma = numpyro.sample("sigma_shift", prior("sigma_shift", spec.overrides))
     pred = numpyro.deterministic("shift_pred", curve + offset * data["direction"])
     observe_shift(pred, sigma, data["shift"], likelihood=spec.likelihood, df=spec.student_df)
+
+
+def _baseline_curve(amp, power, amplitude, f0):
+    xs = amplitude * jnp.square(2.0 * jnp.pi * jnp.abs(f0)) / materials.G_STANDARD
+    return -amp * jnp.power(xs, power)
 
 
 def _baseline(spec: ModelSpec, data: dict) -> None:
@@ -213,54 +356,69 @@ def _baseline(spec: ModelSpec, data: dict) -> None:
     if spec.use_shift:
         amp = numpyro.sample("amp", prior("amp", spec.overrides))
         power = numpyro.sample("power", prior("power", spec.overrides))
-        omega0 = 2.0 * jnp.pi * jnp.abs(f0)
-        xs = data["amplitude"] * jnp.square(omega0[data["proto"]]) / materials.G_STANDARD
-        _observe_drive(spec, -amp * jnp.power(xs, power), data)
+        _observe_drive(spec, _baseline_curve(amp, power, data["amplitude"],
+                                             f0[data["proto"]]), data)
     if spec.use_q:
         _nuisance_q(spec, data)
 
 
+def _law_globals(spec: ModelSpec, data: dict) -> dict[str, Any]:
+    """Sample the law's global parameters; returns them with log delta0_ref and the
+    shape parameter of the f0 -> delta0 map."""
+    law, load, radius = spec.law, data["load"], data["radius"]
+    g: dict[str, Any] = {"n": None, "gamma": None, "young": None, "e_star": None, "shape": 0.0}
+    if law == "powerlaw":
+        g["n"] = g["shape"] = numpyro.sample("n", prior("n", spec.overrides))
+        # the prefactor C is not identifiable apart from delta0_ref: sample the latter
+        g["log_ref"] = numpyro.sample("delta0_ref_log", prior("delta0_ref_log", spec.overrides))
+        return g
+    young = g["young"] = numpyro.sample("young", prior("young", spec.overrides))
+    e_star = g["e_star"] = numpyro.deterministic(
+        "e_star", materials.effective_modulus(young, data["nu_bead"], young, data["nu_rod"]))
+    if law == "jkr":
+        gamma = g["gamma"] = g["shape"] = numpyro.sample("gamma", prior("gamma", spec.overrides))
+        ref = _module("jkr").static_overlap(load, e_star=e_star, radius=radius, gamma=gamma)
+    else:
+        ref = hertz.static_overlap(load, e_star=e_star, radius=radius)
+    g["log_ref"] = jnp.log(ref)
+    return g
+
+
+def _damping(spec: ModelSpec, young, data: dict):
+    ve = _module("viscoelastic")
+    nu = data["nu_bead"]
+    if spec.eta_mode == "shared":
+        eta_s = eta_q = numpyro.sample("eta", prior("eta", spec.overrides))
+    else:
+        eta_s = numpyro.sample("eta_shift", prior("eta_shift", spec.overrides))
+        eta_q = numpyro.sample("eta_q", prior("eta_q", spec.overrides))
+    return (ve.damping_constant(eta1=eta_s, eta2=eta_s, young=young, poisson=nu),
+            ve.damping_constant(eta1=eta_q, eta2=eta_q, young=young, poisson=nu))
+
+
 def _law_model(spec: ModelSpec, data: dict) -> None:
     law = spec.law
-    n_p = data["n_protocols"]
-    mass, load, radius = data["mass"], data["load"], data["radius"]
-    n = None
-    if law == "powerlaw":
-        n = numpyro.sample("n", prior("n", spec.overrides))
-        ref = jnp.exp(numpyro.sample("delta0_ref_log", prior("delta0_ref_log", spec.overrides)))
-        coeff = powerlaw.coefficient_from_overlap(load, ref, n)
-        delta0 = _delta0(spec, ref, n_p)
-        k0 = powerlaw.stiffness(delta0, coeff=coeff, n=n)
-    else:
-        young = numpyro.sample("young", prior("young", spec.overrides))
-        e_star = materials.effective_modulus(young, data["nu_bead"], young, data["nu_rod"])
-        numpyro.deterministic("e_star", e_star)
-        if law == "jkr":
-            jkr = _module("jkr")
-            gamma = numpyro.sample("gamma", prior("gamma", spec.overrides))
-            ref = jkr.static_overlap(load, e_star=e_star, radius=radius, gamma=gamma)
-            delta0 = _delta0(spec, ref, n_p)
-            k0 = jkr.stiffness(delta0, e_star=e_star, radius=radius, gamma=gamma)
-        else:
-            ref = hertz.static_overlap(load, e_star=e_star, radius=radius)
-            delta0 = _delta0(spec, ref, n_p)
-            k0 = hertz.stiffness(delta0, e_star=e_star, radius=radius)
-    f0_pred = numpyro.deterministic("f0_pred", jnp.sqrt(k0 / mass) / (2.0 * jnp.pi))
-    omega0 = 2.0 * jnp.pi * f0_pred
+    scene = {"load": data["load"], "mass": data["mass"], "radius": data["radius"]}
+    g = _law_globals(spec, data)
+    scatter = numpyro.sample("delta0_scatter", prior("delta0_scatter", spec.overrides))
+    # resonance of a contact at the reference overlap (the f0 the law predicts for the
+    # nominal mount; the median of the protocols' f0 a priori)
+    numpyro.deterministic("f0_pred", _invert_log_overlap(law, g["log_ref"], g["shape"], scene))
     if spec.use_f0:
-        _observe_f0(spec, f0_pred, data)
+        f0_dist = MeasuredF0(law, g["log_ref"], scatter, g["shape"], **scene)
+        with numpyro.plate("protocols", data["n_protocols"]):
+            f0 = numpyro.sample("f0_obs", f0_dist, obs=data["f0"])
+    else:
+        if data.get("f0") is None:
+            raise ValueError("use_f0=False conditions on the measured f0: data['f0'] is needed")
+        f0 = data["f0"]
+    delta0 = numpyro.deterministic("delta0", jnp.exp(log_overlap(law, f0, shape=g["shape"],
+                                                                 **scene)))
+    omega0 = 2.0 * jnp.pi * f0
 
     a_shift = a_q = None
     if law == "viscoelastic":
-        ve = _module("viscoelastic")
-        nu = data["nu_bead"]
-        if spec.eta_mode == "shared":
-            eta_s = eta_q = numpyro.sample("eta", prior("eta", spec.overrides))
-        else:
-            eta_s = numpyro.sample("eta_shift", prior("eta_shift", spec.overrides))
-            eta_q = numpyro.sample("eta_q", prior("eta_q", spec.overrides))
-        a_shift = ve.damping_constant(eta1=eta_s, eta2=eta_s, young=young, poisson=nu)
-        a_q = ve.damping_constant(eta1=eta_q, eta2=eta_q, young=young, poisson=nu)
+        a_shift, a_q = _damping(spec, g["young"], data)
 
     if spec.use_shift:
         p = data["proto"]
@@ -269,10 +427,9 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
         if law == "viscoelastic":
             kw = {"damping_constant": a_shift, "omega": omega0[p]}
         elif law == "jkr":
-            jkr_load = jkr.force(delta0, e_star=e_star, radius=radius, gamma=gamma)[p]
-            kw = {"jkr_kw": {"load": jkr_load, "e_star": e_star, "radius": radius,
-                             "gamma": gamma}}
-        curve = shift_forward(spec, x, n=n, **kw)
+            curve = shift_forward(spec, x, jkr_kw={**scene, "gamma": g["gamma"]})
+        if law != "jkr":
+            curve = shift_forward(spec, x, n=g["n"], **kw)
         _observe_drive(spec, curve, data)
 
     if spec.use_q:
@@ -302,7 +459,7 @@ def build_model(spec: ModelSpec | str, n_protocols: int | None = None,
     # import the forward modules now, outside any trace: a first import under jit would
     # turn their module-level jnp constants into leaked tracers
     needed = {"hertz": ["shift"], "powerlaw": ["shift"], "viscoelastic": ["shift", "viscoelastic"],
-              "jkr": ["shift", "jkr"], "baseline": []}[spec.law]
+              "jkr": ["shift", "jkr", "jkr_table"], "baseline": []}[spec.law]
     for mod in needed:
         _module(mod)
     if spec.rung == "backbone" and spec.law != "baseline":
@@ -327,3 +484,49 @@ def build_model(spec: ModelSpec | str, n_protocols: int | None = None,
 
     model.spec = spec  # type: ignore[attr-defined]
     return model
+
+
+def curve_draws(spec: ModelSpec, idata: Any, x_grid: Any, data: dict) -> np.ndarray:
+    """Noise-free Delta f/f0 of an up sweep (no down-sweep offset) on ``x_grid`` =
+    delta_a/delta0 for every posterior draw: array (chains * draws, len(x_grid)).
+
+    Through :func:`shift_forward`. Protocol-dependent inputs are taken at the median
+    measured f0 of ``data`` (model inputs): omega in the paper's Eq. 25, the JKR state.
+    Baseline: its amplitude scale xs = delta_a omega0^2/g is evaluated with the Hertz
+    overlap from that f0 as delta0 (xs = 1.5 x when the load is the weight).
+    """
+    post = idata.posterior
+
+    def draws(name):
+        a = np.asarray(post[name])
+        return jnp.asarray(a.reshape(-1, *a.shape[2:]))
+
+    x = jnp.asarray(np.asarray(x_grid, float))
+    f0 = float(np.median(np.asarray(data["f0"])))
+    load, mass, radius = data["load"], data["mass"], data["radius"]
+    law = spec.law
+    if law == "baseline":
+        amp_x = x * hertz.overlap_from_frequency(f0, load, mass)
+        fn = jax.vmap(lambda a, b: _baseline_curve(a, b, amp_x, f0))
+        return np.asarray(fn(draws("amp"), draws("power")))
+    if law == "powerlaw":
+        return np.asarray(jax.vmap(lambda n: shift_forward(spec, x, n=n))(draws("n")))
+    if law == "jkr":
+        def one(gamma):
+            return shift_forward(spec, x, jkr_kw={"load": load, "radius": radius,
+                                                  "gamma": gamma})
+
+        return np.asarray(jax.vmap(one)(draws("gamma")))
+    if law == "viscoelastic" and spec.rung == "paper_eq25":
+        ve = _module("viscoelastic")
+        eta = draws("eta" if spec.eta_mode == "shared" else "eta_shift")
+
+        def one_ve(e, y):
+            a = ve.damping_constant(eta1=e, eta2=e, young=y, poisson=data["nu_bead"])
+            return shift_forward(spec, x, damping_constant=a, omega=2.0 * jnp.pi * f0)
+
+        return np.asarray(jax.vmap(one_ve)(eta, draws("young")))
+    # Hertz, viscoelastic first order / backbone: one curve, no free parameter
+    n_draws = int(np.prod(np.asarray(post["sigma_shift"]).shape[:2]))
+    curve = np.asarray(shift_forward(spec, x))
+    return np.broadcast_to(curve, (n_draws, curve.size)).copy()
