@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +31,11 @@ def configure(n_devices: int = 4, *, x64: bool = True) -> None:
     numpyro.set_host_device_count(int(n_devices))
     if x64:
         jax.config.update("jax_enable_x64", True)
+    if jax.local_device_count() < n_devices:
+        # the backend started before the flag was set (importing this package starts it):
+        # set XLA_FLAGS first, as workflows.cli.host_devices does
+        warnings.warn(f"only {jax.local_device_count()} JAX host device(s): NUTS chains will "
+                      "run sequentially (slower, same numbers)", RuntimeWarning, stacklevel=2)
 
 
 @dataclass

@@ -10,7 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
-__all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu"]
+__all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu", "knot_cell"]
 
 
 def safe_sqrt(x: ArrayLike) -> jnp.ndarray:
@@ -46,3 +46,20 @@ def smooth_relu(x: ArrayLike, width: ArrayLike) -> jnp.ndarray:
     """Softplus of width ``width``: a C-infinity stand-in for max(x, 0)."""
     x = jnp.asarray(x)
     return width * jnp.logaddexp(0.0, x / width)
+
+
+def knot_cell(knots: ArrayLike, z: ArrayLike, frac: ArrayLike) -> tuple[jnp.ndarray,
+                                                                          jnp.ndarray]:
+    """(i, z - knots[i]) with knots[i] <= z < knots[i+1], clipped to the end pieces.
+
+    ``frac`` is the fractional index of z from the closed form of the knot grading
+    (e.g. k (1 - sqrt(1 - u)) for u_i = 1 - (1 - i/k)^2); one comparison each way
+    repairs rounding at a knot. Replaces jnp.searchsorted, whose binary search costs
+    ~20x more per point under vmap on the CPU (measured 11 us vs 0.5 us for 454 points).
+    """
+    knots = jnp.asarray(knots)
+    last = knots.shape[0] - 2
+    i = jnp.clip(jnp.floor(jnp.nan_to_num(frac)).astype(jnp.int32), 0, last)
+    i = jnp.where((z < knots[i]) & (i > 0), i - 1, i)
+    i = jnp.where((z >= knots[jnp.minimum(i + 1, last + 1)]) & (i < last), i + 1, i)
+    return i, z - knots[i]

@@ -60,6 +60,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
+from ._math import knot_cell
+
 __all__ = [
     "X_MAX",
     "N_MIN",
@@ -214,12 +216,18 @@ def _cheb_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
 
 
 def _spline_eval(knots: np.ndarray, coef: np.ndarray, z: jnp.ndarray,
-                 basis: jnp.ndarray) -> jnp.ndarray:
-    """Tensor-product spline(z) x Chebyshev(n); z outside the knots extends the end piece."""
-    knots_j = jnp.asarray(knots)
-    i = jnp.clip(jnp.searchsorted(knots_j, z, side="right") - 1, 0, knots.size - 2)
-    d = z - knots_j[i]
-    c = jnp.einsum("k...m,...m->k...", jnp.asarray(coef)[:, i, :], basis)
+                 basis: jnp.ndarray, frac: jnp.ndarray) -> jnp.ndarray:
+    """Tensor-product spline(z) x Chebyshev(n); z outside the knots extends the end piece.
+
+    ``basis`` is (m,) when n is one scalar (the sampler's case: one n, many x): the
+    Chebyshev sum is then taken once per knot, before the per-point gather, which is
+    ~100x cheaper under vmap than gathering (4, points, m) blocks per particle.
+    """
+    i, d = knot_cell(knots, z, frac)
+    if basis.ndim == 1:
+        c = (jnp.asarray(coef) @ basis)[:, i]
+    else:
+        c = jnp.einsum("k...m,...m->k...", jnp.asarray(coef)[:, i, :], basis)
     return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
 
 
@@ -248,16 +256,24 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
     backbone. About 0.2 us per point (value and gradient) vmapped, compile < 1 s.
     """
     tab = load_table()
-    x, n = jnp.broadcast_arrays(jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float))
+    x, n = jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float)
+    if n.ndim > 0:  # a scalar n stays scalar: see _spline_eval
+        x, n = jnp.broadcast_arrays(x, n)
     inside = ((x >= 0.0) & (x <= X_MAX) & (n >= N_MIN - _N_TOL) & (n <= N_MAX + _N_TOL))
     # clamp into the domain so both branches and their gradients stay finite (double where)
     xs = jnp.clip(x, 0.0, X_MAX)
     ns = jnp.clip(n, N_MIN, N_MAX)
     basis = _cheb_basis(ns - 2.0, tab["n_nodes"].size)
     xc = basis @ jnp.asarray(tab["xc_cheb"])
-    q = _spline_eval(tab["u_knots"], tab["coef_contact"], xs / xc, basis)
+    # fractional knot indices from the grading of _knots (u = 1 - (1-s)^2, v = s^2)
+    last = tab["u_knots"].size - 1
+    u = xs / xc
+    v = (xs - xc) / (X_MAX - xc)
+    fu = last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0)))
+    fv = last * jnp.sqrt(jnp.clip(v, 0.0, 1.0))
+    q = _spline_eval(tab["u_knots"], tab["coef_contact"], u, basis, fu)
     contact = (ns - 1.0) * xs**2 * q
-    flight = _spline_eval(tab["v_knots"], tab["coef_flight"], (xs - xc) / (X_MAX - xc), basis)
+    flight = _spline_eval(tab["v_knots"], tab["coef_flight"], v, basis, fv)
     s = jnp.where(xs <= xc, contact, flight)
     return jnp.where(inside, s, jnp.nan)
 

@@ -42,6 +42,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
+from ._math import knot_cell
+
 __all__ = ["X_MAX", "R_MIN", "R_MAX", "TABLE_PATH", "load_ratio", "shift_first_order_fast",
            "build_table", "load_table", "reference_shift"]
 
@@ -112,19 +114,19 @@ def load_table() -> dict[str, np.ndarray]:
     return _TABLE
 
 
-def _cell(knots: np.ndarray, z: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
-    kj = jnp.asarray(knots)
-    i = jnp.clip(jnp.searchsorted(kj, z, side="right") - 1, 0, knots.size - 2)
-    return i, z - kj[i]
-
-
-def _eval(zk, qk, coef, z, q):
-    i, dz = _cell(zk, z)
-    j, dq = _cell(qk, q)
-    # advanced indices separated by a slice go first: (..., 4, 4) as [b, a]
-    c = jnp.asarray(coef)[:, j, :, i]
+def _eval(zk, qk, coef, z, q, fz):
+    # fz: z's fractional knot index (closed form of the grading in _grids)
+    i, dz = knot_cell(zk, z, fz)
+    j, dq = knot_cell(qk, q, (q - qk[0]) / (qk[1] - qk[0]))
     pz = jnp.stack([dz**3, dz**2, dz, jnp.ones_like(dz)], axis=-1)
     pq = jnp.stack([dq**3, dq**2, dq, jnp.ones_like(dq)], axis=-1)
+    if q.ndim == 0:
+        # one ratio, many x (the sampler's case): reduce to a 1-D spline in z first,
+        # then gather per point (no (points, 4, 4) blocks per particle under vmap)
+        cz = jnp.einsum("b,baz->az", pq, jnp.asarray(coef)[:, j])
+        return jnp.einsum("a...,...a->...", cz[:, i], pz)
+    # advanced indices separated by a slice go first: (..., 4, 4) as [b, a]
+    c = jnp.asarray(coef)[:, j, :, i]
     return jnp.einsum("...ba,...b,...a->...", c, pq, pz)
 
 
@@ -139,14 +141,19 @@ def shift_first_order_fast(x: ArrayLike, ratio: ArrayLike) -> jnp.ndarray:
     one-sided (x - 1)^(1/2) term and the table is C0 with a finite one-sided slope).
     """
     tab = load_table()
-    x, r = jnp.broadcast_arrays(jnp.asarray(x, float), jnp.asarray(ratio, float))
+    x, r = jnp.asarray(x, float), jnp.asarray(ratio, float)
+    if r.ndim > 0:  # a scalar ratio stays scalar: see _eval
+        x, r = jnp.broadcast_arrays(x, r)
     xs = jnp.clip(jnp.abs(x), 0.0, X_MAX)
     q = jnp.clip(jnp.log(jnp.maximum(r, R_MIN)), np.log(R_MIN), np.log(R_MAX))
     # double where: the flight coordinate sqrt(x - 1) sees x >= 1 only
     w = jnp.sqrt(jnp.where(xs > 1.0, xs - 1.0, 0.0))
-    contact = _eval(tab["x_knots"], tab["q_knots"], tab["coef_contact"],
-                    jnp.minimum(xs, 1.0), q)
-    flight = _eval(tab["w_knots"], tab["q_knots"], tab["coef_flight"], w, q)
+    xk = jnp.minimum(xs, 1.0)
+    last_x, last_w = tab["x_knots"].size - 1, tab["w_knots"].size - 1
+    fx = last_x * (1.0 - jnp.sqrt(1.0 - xk))
+    fw = last_w * jnp.cbrt(jnp.square(w / np.sqrt(X_MAX - 1.0)))
+    contact = _eval(tab["x_knots"], tab["q_knots"], tab["coef_contact"], xk, q, fx)
+    flight = _eval(tab["w_knots"], tab["q_knots"], tab["coef_flight"], w, q, fw)
     return jnp.where(xs > 1.0, flight, contact)
 
 

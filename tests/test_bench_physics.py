@@ -21,11 +21,18 @@ def test_bench_physics_writes_tables(tmp_path, tiny):
     assert "| method |" in text and "## Targets" in text
     for target in ("1000x faster than quad", "within 3x of scipy.special", "1e-13 relative"):
         assert target in text
+    # each target line says met or MISSED, and gives the like-for-like ratios too
+    for line in (ln for ln in text.splitlines() if ln.startswith("- ") and "x" in ln[:40]):
+        if "faster than quad" in line or "within 3x" in line or "1e-13" in line:
+            assert "-> met" in line or "-> MISSED" in line
+    assert text.count("Like for like") == 2
     with open(tmp_path / "bench_physics.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     by = {r["method"]: r for r in rows}
     jax_val = by["jax closed form (beadrod), value"]
     assert float(jax_val["time_per_point_us"]) > 0
+    # quad is timed for the value and for value + gradient (three integrals)
+    assert float(by["scipy.integrate.quad, value + d/dx + d/dn"]["time_per_point_us"]) > 0
     # the closed form is accurate on the planted hard points (x = 1, n = 3/2 +- 1e-9, ...)
     assert float(jax_val["max_rel_error"]) < 1e-13
     assert float(by["jax closed form, clipped x in (1, 1.5], value"]["max_rel_error"]) < 1e-13

@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-__all__ = ["main", "build_parser", "COMMAND_MODULES"]
+__all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES"]
 
 COMMAND_MODULES: tuple[str, ...] = (
     "workflows.cmd_compare",
@@ -25,10 +25,33 @@ COMMAND_MODULES: tuple[str, ...] = (
 )
 
 
+def host_devices(n: int) -> None:
+    """Ask XLA for ``n`` host (CPU) devices so NUTS chains run in parallel.
+
+    Must run before anything initialises the JAX backend (importing ``inference``
+    does, through its module-level distributions), so it sets the flag itself
+    rather than importing numpyro. A count already in XLA_FLAGS is left alone.
+    """
+    import os
+
+    flags = os.environ.get("XLA_FLAGS", "")
+    if "xla_force_host_platform_device_count" not in flags:
+        os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={int(n)}"
+
+
 def _enable_x64() -> None:
     import jax
 
     jax.config.update("jax_enable_x64", True)
+    # persistent compilation cache: a second run skips most XLA compilation (the first
+    # run on a machine pays it in full). BEADROD_JAX_CACHE="" switches it off.
+    import os
+
+    cache = os.environ.get("BEADROD_JAX_CACHE",
+                           os.path.join(os.path.expanduser("~"), ".cache", "beadrod", "jax"))
+    if cache:
+        jax.config.update("jax_compilation_cache_dir", cache)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 
 
 def build_parser() -> argparse.ArgumentParser:

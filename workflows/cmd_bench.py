@@ -20,9 +20,12 @@ BENCHES: dict[str, str] = {
 
 
 def _run(args: argparse.Namespace) -> int:
+    from .cli import host_devices
+
+    host_devices(4)  # parallel chains: must precede anything that starts the JAX backend
     from inference.sample import configure
 
-    configure(4)  # parallel chains: must precede anything that starts the JAX backend
+    configure(4)
     module = importlib.import_module(BENCHES[args.which])
     md = module.run(Path(args.out), quick=args.quick)
     if not args.quiet:

@@ -58,11 +58,13 @@ def _check_out(out: Path, force: bool, resume: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from inference.sample import configure
-
+    from .cli import host_devices
     from .config import resolve
 
     cfg = resolve(args.config, _flags(args))
+    host_devices(max(1, min(int(cfg["sampling"]["chains"]), 8)))  # before JAX starts
+    from inference.sample import configure
+
     configure(max(1, min(int(cfg["sampling"]["chains"]), 8)))
     out = Path(cfg["out"])
     _check_out(out, args.force, args.resume)
@@ -97,8 +99,9 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--smc-particles", type=int, help="tempered-SMC particles")
     p.add_argument("--smc-seeds", type=int, help="independent SMC runs (their spread is the "
                    "error bar)")
-    p.add_argument("--evidence", help="comma-separated evidence estimators: ns,smc (default "
-                   "both)")
+    p.add_argument("--evidence", help="comma-separated evidence estimators among ns (nested "
+                   "sampling), bridge (bridge sampling from the NUTS draws) and smc "
+                   "(tempered SMC); default ns,bridge")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
     p.add_argument("--no-two-percent-rule", action="store_true",
                    help="keep drive steps after the linear resonance drifted by > 2 %%")

@@ -118,14 +118,20 @@ def make_figures(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, result: 
                  "paper Figs. 7 and 9).", "fit")
 
     tension = result.get("tension")
-    npz = out / "idata" / "tension_eta_samples.npz"
-    if tension is not None and npz.exists():
+    for t in (tension, (tension or {}).get("paper")):
+        npz = out / "idata" / f"tension_eta_samples_{(t or {}).get('rung')}.npz"
+        if t is None or not npz.exists():
+            continue
         z = np.load(npz)
-        save(plots.fig_eta_tension({"shift alone": np.log10(z["shift"]),
+        shift_label = "shift alone" if t.get("eta_in_shift") else "shift alone (= prior)"
+        save(plots.fig_eta_tension({shift_label: np.log10(z["shift"]),
                                     "Q alone": np.log10(z["q"]),
                                     "joint (shared eta)": np.log10(z["joint"])}),
-             "eta_tension", "Posterior of log10 eta from the shift alone, from the reference Q "
-             "alone and from both with one shared eta: the Q-versus-shift tension.", "tension")
+             f"eta_tension_{t['rung']}", f"Forward model '{t['rung']}': posterior of log10 eta "
+             "from the shift alone, from the reference Q alone and from both with one shared "
+             "eta: the Q-versus-shift tension." + ("" if t.get("eta_in_shift") else
+             " In this (correct) physics eta does not enter the shift, so the shift-alone "
+             "posterior is the prior."), "tension")
 
     laws = [r for r in result["laws"] if r.get("log_z") is not None]
     if laws:

@@ -127,6 +127,7 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
             out: Path, *, resume: bool = False) -> LawRun:
     """NUTS + gate + LOO + evidence for one law; writes idata/NAME.nc and laws/NAME.json."""
     from inference import diagnostics
+    from inference.bridge import bridge_sampling_log_z
     from inference.evidence import combined_agreement, nested_sampling_log_z, smc_log_z
     from inference.numpyro_models import build_model
     from inference.sample import load_idata, run_nuts, save_idata
@@ -160,6 +161,10 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         estimates["ns"] = nested_sampling_log_z(model, {"data": inputs},
                                                 num_live_points=ev_cfg["live_points"],
                                                 seed=cfg["seed"])
+    if "bridge" in ev_cfg["methods"]:
+        log.info("%s: evidence by bridge sampling from the NUTS draws", name)
+        estimates["bridge"] = bridge_sampling_log_z(model, {"data": inputs},
+                                                    fit.idata.posterior, seed=cfg["seed"])
     if "smc" in ev_cfg["methods"]:
         log.info("%s: evidence by tempered SMC (%d particles x %d seeds)", name,
                  ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
@@ -171,8 +176,8 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     timings["total_s"] = time.perf_counter() - t0
     ests = list(estimates.values())
     agree = None
-    if len(ests) == 2:
-        agree = bool(combined_agreement(ests[0], ests[1])[0])
+    if len(ests) >= 2:
+        agree = all(combined_agreement(ests[0], e)[0] for e in ests[1:])
         if not agree:
             log.warning("%s: the two evidence estimators DISAGREE beyond their errors", name)
     failures = list(verdict.failures)

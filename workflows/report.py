@@ -326,12 +326,20 @@ def report_blocks(result: Mapping) -> list[Block]:
                    "successful law (errors in quadrature); elpd_loo ± its standard error."))
 
     if result.get("tension"):
-        t = result["tension"]
         b.append(("h", 2, "Viscosity tension: shift versus Q"))
-        b.append(("p", t.get("paragraph") or tension_paragraph(t)))
-        headers, body, flags = _tension_table(t)
-        if body:
-            b.append(("table", headers, body, flags))
+        main = result["tension"]
+        for t in (main.get("paper"), main):
+            if not t:
+                continue
+            b.append(("h", 3, f"Forward model: {t.get('rung', '?')}"))
+            bad = [k for k, ok in (t.get("fits_ok") or {}).items() if not ok]
+            if bad:
+                b.append(("warn", f"{_FAILED}: the {', '.join(bad)} fit(s) of this block failed "
+                                  "their diagnostics; read its numbers with care."))
+            b.append(("p", t.get("paragraph") or tension_paragraph(t)))
+            headers, body, flags = _tension_table(t)
+            if body:
+                b.append(("table", headers, body, flags))
 
     b.append(("h", 2, "Parameters of every law"))
     for lw in laws:
