@@ -90,6 +90,7 @@ class ProcessedDataset:
     source: str
     references: pd.DataFrame = field(default_factory=pd.DataFrame)
     options: dict = field(default_factory=dict)
+    truth: dict | None = None  # truth.json of a synthetic world, else None
 
     @property
     def n_drive(self) -> int:
@@ -199,6 +200,7 @@ def process(
         drive_voltage=volt, drive_amplitude=amp, drive_f_res=fres,
         drive_shift=shift, drive_inv_q_shift=inv_q, excluded=excluded,
         scene=dataset.scene, data_hash=dataset.data_hash, source=str(dataset.path),
+        truth=dataset.truth,
         references=pd.concat(ref_parts, ignore_index=True),
         options={"two_percent_rule": two_percent_rule, "shift_reference": shift_reference,
                  "threshold": threshold},

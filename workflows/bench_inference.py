@@ -130,7 +130,8 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     import jax
 
     from data import load_default
-    from inference.evidence import nested_sampling_log_z, smc_log_z
+    from inference.bridge import bridge_sampling_log_z
+    from inference.evidence import nested_sampling_log_z
     from inference.likelihood import model_inputs
     from inference.numpyro_models import ModelSpec, build_model
     from inference.sample import run_nuts
@@ -139,7 +140,9 @@ def run(out_dir: Path, quick: bool = False) -> Path:
 
     out_dir = Path(out_dir)
     chains, warm, draws = (2, 30, 30) if quick else (4, 400, 400)
-    live, parts, seeds = (30, 64, 2) if quick else (300, 600, 3)
+    from .config import DEFAULTS
+
+    live = 30 if quick else DEFAULTS["evidence"]["live_points"]  # what compare uses
     ds = load_default()
     inputs = model_inputs(ds)
     rows = []
@@ -154,17 +157,18 @@ def run(out_dir: Path, quick: bool = False) -> Path:
         sampling = max(t["nuts_s"] - t.get("compile_s", 0.0), 1e-9)
         names = [v for v in fit.idata.posterior.data_vars if v in PARAM_UNITS]
         ess = _min_ess(fit.idata, names)
-        ns = smc = None
+        ns = br = None
         if name != "hertz_first_order":
             ns = nested_sampling_log_z(model, {"data": inputs}, num_live_points=live)
-            smc = smc_log_z(model, {"data": inputs}, num_particles=parts, seeds=tuple(range(seeds)))
-            t_evidence += ns.wall_s + smc.wall_s
+            br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior)
+            t_evidence += ns.wall_s + br.wall_s
         rows.append({"model": name, "rung": spec.rung, "compile_s": t.get("compile_s"),
                      "sampling_s": sampling, "min_bulk_ess": ess, "ess_per_s": ess / sampling,
                      "log_z_ns": ns.log_z if ns else None, "err_ns": ns.log_z_err if ns else None,
-                     "ns_s": ns.wall_s if ns else None, "log_z_smc": smc.log_z if smc else None,
-                     "err_smc": smc.log_z_err if smc else None,
-                     "smc_s": smc.wall_s if smc else None})
+                     "ns_s": ns.wall_s if ns else None,
+                     "log_z_bridge": br.log_z if br else None,
+                     "err_bridge": br.log_z_err if br else None,
+                     "bridge_s": br.wall_s if br else None})
     # the baseline, on the same posterior as hertz_first_order
     d = _numpy_inputs(inputs)
     spread = _check_same_posterior(build_model(specs["hertz_first_order"]), inputs, d,
@@ -188,7 +192,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
           f"{ds.n_protocols} protocols, {ds.n_drive} drive sweeps)", "",
           f"Device: {jax.devices()[0].platform}, {jax.local_device_count()} host device(s); "
           f"NUTS {chains} chains x {warm} warmup + {draws} draws; evidence: nested sampling "
-          f"{live} live points, tempered SMC {parts} particles x {seeds} seeds; "
+          f"{live} live points, bridge sampling from the NUTS draws; "
           f"emcee {walkers} walkers x {steps} steps (ESS from the integrated autocorrelation "
           "time of the second half). Compile time is a 1+1-iteration run of the same kernel.",
           "", _markdown(table), "",

@@ -113,7 +113,13 @@ def _tension_block(runs, inputs, cfg, rung: str, lik: str, eta_q, out: Path) -> 
     missed = min(ppc, key=lambda k: (ppc[k]["p_value"], -ppc[k]["rms_std_residual"]))
     by = (f"rms standardised residual {ppc[missed]['rms_std_residual']:.2f}, "
           f"mean {ppc[missed]['mean_std_residual']:+.2f}, p = {ppc[missed]['p_value']:.3f}")
+    q_scale = None
+    if "q_pred" in shared.idata.posterior and inputs.get("q_obs") is not None:
+        # in natural units: the joint fit's linear Q against the measured reference Q
+        q_scale = {"q_pred_median": float(np.median(np.asarray(shared.idata.posterior["q_pred"]))),
+                   "q_obs_median": float(np.median(np.asarray(inputs["q_obs"])))}
     block = {
+        "q_scale": q_scale,
         "rung": rung, "eta_in_shift": rung in ETA_IN_SHIFT,
         "fits_ok": {k: r.summary["status"] == "ok" for k, r in runs.items()},
         "eta_shift_q05_q50_q95": _eta_triple(eta_shift),
@@ -151,7 +157,12 @@ def tension_paragraph(t: dict[str, Any]) -> str:
              f"in the split model P(eta_shift > eta_Q) = {t['p_shift_gt_q']:.2f}. ")
     if t.get("log_bf_split_vs_shared") is not None:
         text += (f"The log Bayes factor of split over shared eta is "
-                 f"{t['log_bf_split_vs_shared']:.1f} +- {t['log_bf_err']:.1f} nats. ")
+                 f"{t['log_bf_split_vs_shared']:.2f} +- {t['log_bf_err']:.2f} nats "
+                 f"({t.get('log_bf_method') or 'evidence'}). ")
+    if t.get("q_scale"):
+        qs = t["q_scale"]
+        text += (f"With one shared eta the predicted linear Q has median "
+                 f"{qs['q_pred_median']:.3g} against a measured median {qs['q_obs_median']:.3g}. ")
     text += (f"The joint fit misses the {t['ppc']['missed']} data most "
              f"({t['ppc']['by_how_much']}; posterior predictive p = {t['ppc']['shift_p']:.3f} "
              f"for the shift, {t['ppc']['q_p']:.3f} for Q).")
