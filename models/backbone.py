@@ -14,7 +14,15 @@ so Gauss-Legendre in theta converges spectrally; tau(theta) is the cumulative
 integral (nested Gauss-Legendre). If the orbit leaves contact (P(qmax) > P(-1)) the
 contact arc q in [-1, qmax] uses q = -1 + (qmax + 1) cos^2(phi) and the flight arc
 is a parabola, integrated in closed form for the period and by Gauss-Legendre for
-the Fourier integral.
+the Fourier integral. Just past contact-loss onset the speed at q = -1 is small and the
+contact arc's integrand has complex singularities close to phi = pi/2: that arc uses a
+composite rule graded towards pi/2, fixed whatever ``nodes`` (one 48-node rule there was
+off by up to 1e-4 in the period, and the amplitude root solve near x_c by 1e-5; now about
+1e-12 against an mpmath energy integral, tests/test_backbone.py). ``nodes`` sets the
+contact-only orbit's rule (48 are within ~1e-12 up to the onset) and the flight
+parabola's. The energy gaps next to the turning points are formed without subtracting
+nearly equal q (2h sin^2, 2h cos^2): with 256 nodes the nested nodes rounded onto qmax
+and the gap to 0 (NaN).
 
 Amplitude (DESIGN.md convention): x = first-harmonic amplitude of q,
 a1 = (4/T) int_0^(T/2) q(tau) cos(omega tau) dtau (the orbit is even about qmax), so
@@ -51,6 +59,9 @@ __all__ = [
 ]
 
 _N_NODES = 48
+_N_PANELS = 24       # flight arc: graded panels reach (pi/4) 0.25^22 ~ 4e-14 of pi/2
+_PANEL_RATIO = 0.25
+_PANEL_NODES = 24    # Gauss nodes per panel: interpolant 3^-24 ~ 4e-12 (see _graded)
 
 
 def _gl(n: int, a: float = 0.0, b: float = 1.0):
@@ -70,15 +81,18 @@ def powerlaw_divided(a: ArrayLike, b: ArrayLike, n: ArrayLike) -> jnp.ndarray:
 
     With y_lo = 1 + min(a, b) > 0 and rho = |b - a|/y_lo:
     [y_lo^n expm1((n+1) log1p(rho)) / ((n+1) rho) - 1]/n. Falls back to the plain
-    difference quotient where y_lo <= 1e-9 (contact edge, flight).
+    difference quotient where y_lo <= 1e-9 (contact edge, flight); a == b gives P'(a).
     """
     lo, d = jnp.minimum(a, b), jnp.abs(b - a)
     ylo = 1.0 + lo
-    ok = (ylo > 1e-9) & (d > 0)
+    ok = ylo > 1e-9
     ys = jnp.where(ok, ylo, 1.0)
     rho = jnp.where(ok, d, 1.0) / ys
-    fine = (jnp.power(ys, n) * jnp.expm1((n + 1.0) * jnp.log1p(rho)) / ((n + 1.0) * rho)
-            - 1.0) / n
+    # a == b (nodes that round onto a turning point): the limit P'(a), not 0/0
+    pos = rho > 0
+    rs = jnp.where(pos, rho, 1.0)
+    ratio = jnp.where(pos, jnp.expm1((n + 1.0) * jnp.log1p(rs)) / ((n + 1.0) * rs), 1.0)
+    fine = (jnp.power(ys, n) * ratio - 1.0) / n
     ds = jnp.where(ok, 1.0, d)
     coarse = (powerlaw_potential(jnp.where(ok, 0.0, b), n)
               - powerlaw_potential(jnp.where(ok, -1.0, a), n)) / jnp.where(ds > 0, ds, 1.0)
@@ -112,15 +126,17 @@ def _contact_arc(divided, qmax, qmin, nodes):
 
     The energy gap P(qmax) - P(q) is written (qmax - q) <r>_[q, qmax] on the upper half
     and (q - qmin) <-r>_[qmin, q] on the lower half, so it keeps full relative precision
-    at both turning points (no difference of nearly equal potentials).
+    at both turning points (no difference of nearly equal potentials); qmax - q =
+    2h sin^2(theta/2) and q - qmin = 2h cos^2(theta/2) are formed without subtraction, which
+    would round to 0 at the nested nodes next to the turning points of a fine rule.
     """
     th, w = _gl(nodes, 0.0, np.pi)
     c, h = 0.5 * (qmax + qmin), 0.5 * (qmax - qmin)
 
     def f(theta):
         q = c + h * jnp.cos(theta)
-        upper = (qmax - q) * divided(q, qmax)
-        lower = -(q - qmin) * divided(qmin, q)
+        upper = 2.0 * h * jnp.sin(0.5 * theta) ** 2 * divided(q, qmax)
+        lower = -2.0 * h * jnp.cos(0.5 * theta) ** 2 * divided(qmin, q)
         gap = jnp.where(theta < np.pi / 2, upper, lower)
         return h * jnp.sin(theta) / safe_sqrt(2.0 * gap)
 
@@ -130,23 +146,64 @@ def _contact_arc(divided, qmax, qmin, nodes):
     return c + h * jnp.cos(th), fv, w, tau, jnp.sum(w * fv)
 
 
+def _graded(a: float, b: float):
+    """Composite Gauss-Legendre on [a, b], _N_PANELS panels shrinking geometrically (ratio
+    _PANEL_RATIO) towards b, _PANEL_NODES nodes each: (nodes (P, m), weights (P, m), panel
+    widths (P,)). A singularity at distance d from b (off the interval) is seen by each
+    panel wider than d at a relative distance >= 2 ratio/(1 - ratio) = 2/3 of its
+    half-width, where m-point Gauss converges as 3^(-2m) and the m-point interpolant (the
+    partial integrals of :func:`_partial_integrals`) as 3^(-m); panels narrower than d see
+    it farther. The last panel has width (b - a)/2 ratio^(P - 2); below that scale the
+    integrand's feature is narrower than the panel and contributes O(d)."""
+    ends = b - 0.5 * (b - a) * _PANEL_RATIO ** np.arange(_N_PANELS - 1)
+    edges = np.concatenate([[a], ends, [b]])
+    t, w = np.polynomial.legendre.leggauss(_PANEL_NODES)
+    width = np.diff(edges)
+    x = edges[:-1, None] + width[:, None] * (t + 1) / 2
+    return jnp.asarray(x), jnp.asarray(width[:, None] * w / 2), jnp.asarray(width)
+
+
+def _partial_matrix(m: int) -> np.ndarray:
+    """S with (S f)_i = int_-1^t_i p(t) dt, p the interpolant of f on the m Gauss nodes t_i
+    (spectral integration: Legendre coefficients, then their antiderivatives)."""
+    t, _ = np.polynomial.legendre.leggauss(m)
+    vander = np.polynomial.legendre.legvander(t, m - 1)
+    anti = np.stack([np.polynomial.legendre.legval(t, np.polynomial.legendre.legint(
+        np.eye(m)[j], lbnd=-1.0)) for j in range(m)], axis=1)
+    return anti @ np.linalg.inv(vander)
+
+
 def _flight_arc(divided, qmax, qc, accel, nodes):
-    """Contact arc qmax -> qc (cos^2 map) then the flight parabola to qmin."""
-    ph, w = _gl(nodes, 0.0, np.pi / 2)
+    """Contact arc qmax -> qc (cos^2 map) then the flight parabola to qmin.
+
+    Just past contact-loss onset the speed v at qc is small and dtau/dphi =
+    2 span cos(phi) sin(phi)/sqrt(v^2 + (2 span/n) cos^2(phi) + ...) has complex
+    singularities at a distance ~ v (n/(2 span))^(1/2) from phi = pi/2: the rule is graded
+    towards pi/2 (:func:`_graded`; one Gauss rule on [0, pi/2] lost up to 1e-4 there), and
+    tau at the nodes is the sum of the panels before plus the spectral partial integral in
+    the node's own panel. ``nodes`` is kept for the signature: the graded rule is fixed.
+    """
+    del nodes
+    ph, w, width = _graded(0.0, np.pi / 2)
     span = qmax - qc
 
     def f(phi):
         q = qc + span * jnp.cos(phi) ** 2
-        gap = (qmax - q) * divided(q, qmax)
+        gap = span * jnp.sin(phi) ** 2 * divided(q, qmax)   # qmax - q without cancellation
         return 2.0 * span * jnp.cos(phi) * jnp.sin(phi) / safe_sqrt(2.0 * gap)
 
     fv = f(ph)
-    t, wt = _gl(nodes, 0.0, 1.0)
-    tau = jnp.sum(wt * f(ph[:, None] * t[None, :]), axis=1) * ph
-    tau_c = jnp.sum(w * fv)
+    per_panel = jnp.sum(w * fv, axis=1)
+    before = jnp.cumsum(per_panel) - per_panel
+    inner = 0.5 * width[:, None] * (fv @ jnp.asarray(_PARTIAL.T))
+    tau = (before[:, None] + inner).ravel()
     speed = safe_sqrt(2.0 * span * divided(qc, qmax))
     t_f = speed / accel
-    return qc + span * jnp.cos(ph) ** 2, fv, w, tau, tau_c, speed, t_f
+    return (qc + span * jnp.cos(ph.ravel()) ** 2, fv.ravel(), w.ravel(), tau,
+            jnp.sum(per_panel), speed, t_f)
+
+
+_PARTIAL = _partial_matrix(_PANEL_NODES)
 
 
 def orbit(qmax: ArrayLike, potential: Callable, divided: Callable, *, qmin_lo: ArrayLike,

@@ -8,8 +8,8 @@ by the exact function and stored in ``models/data/backbone_table.npz``.
 Structure of the function (measured, see the tests):
 
 * Contact loss starts at qmax_c(n) = (n+1)^(1/n) - 1 (P(qmax) = P(-1)), i.e. at the
-  first-harmonic amplitude x_c(n) = a1(qmax_c) (x_c = 1 for n = 1, 0.8382 for Hertz,
-  0.5644 for n = 3). At x_c the backbone is C1 but not C2: on both sides it carries a
+  first-harmonic amplitude x_c(n) = a1(qmax_c) (x_c = 1 for n = 1, 0.9213 for Hertz,
+  0.7753 for n = 3). At x_c the backbone is C1 but not C2: on both sides it carries a
   term ~ |x - x_c|^(n + 1/2) (the y^(n+1) term of the potential at the contact edge),
   so the second derivative is infinite there for n < 3/2 and jumps for larger n. For
   n = 1 the left side is identically 0 (linear spring) and the right side is
@@ -27,9 +27,9 @@ with a degree-23 Chebyshev interpolant in n on the 24 Chebyshev-Gauss nodes of [
 the same nodes (error 7e-14). The contact spline is not-a-knot; the flight spline is
 clamped at v = 0 to the contact spline's slope there, so the surrogate is C1 across
 x_c like the exact backbone (C2 elsewhere). Samples: the exact backbone with 48 Gauss
-nodes, but 128 within 0.05 of x_c (:func:`exact_shift`; with 48 nodes the exact backbone
-is off by up to ~1e-4 for qmax within ~1e-5 of qmax_c, and its amplitude root solve
-then also misses by up to ~2e-5 just below x_c), and the exact orbit at
+nodes, but 128 within 0.05 of x_c (:func:`exact_shift`; kept from before the exact
+backbone's graded rule next to contact loss made 48 nodes accurate there too, see
+models.backbone), and the exact orbit at
 qmax_c (1 - 1e-12) for the kink values; Q(0, n) is the Lindstedt coefficient.
 Table: 64 x 24 samples per region, 0.13 MB.
 

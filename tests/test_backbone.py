@@ -119,3 +119,74 @@ def test_backbone_gradients_match_finite_differences():
         assert g == pytest.approx(fd, rel=1e-5)
     gn = float(jax.grad(lambda n: backbone_shift(0.5, n))(1.5))
     assert np.isfinite(gn) and gn < 0
+
+
+def _mp_orbit(qmax, n):
+    """Independent reference: the energy integral by mpmath (tanh-sinh) at 25 digits.
+
+    half period T/2 = int dq/sqrt(2 (E - P(q))) over the contact arc (plus the flight
+    parabola below q = -1); a1 = (2/(T/2)) int_0^(T/2) q cos(w t) dt, on the contact arc
+    by parts: int q cos(w t) dt = [q sin(w t)/w] + (1/w) int sin(w tau(q)) dq, tau(q) the
+    time from qmax down to q (nested quadrature)."""
+    with mp.workdps(25):
+        qmax, n = mp.mpf(qmax), mp.mpf(n)
+
+        def pot(q):
+            y = 1 + q
+            return (y ** (n + 1) / (n + 1) - y + n / (n + 1)) / n if y > 0 else 1 / (n + 1) - y / n
+
+        e = pot(qmax)
+
+        def tau(q):   # real part: nodes that round onto qmax give E - P < 0 at ~1e-25
+            return mp.re(mp.quad(lambda s: 1 / mp.sqrt(2 * (e - pot(s))), [q, qmax]))
+
+        if e <= pot(-1):
+            qmin = mp.findroot(lambda z: pot(z) - e, (mp.mpf(-1) + mp.mpf(10) ** -22, -qmax / 4),
+                               solver="anderson")
+            half = tau(qmin)
+            om = mp.pi / half
+            a1 = 2 / (half * om) * mp.quad(lambda q: mp.sin(om * tau(q)), [qmin, qmax])
+            return float(om), float(a1)
+        v, acc = mp.sqrt(2 * (e - pot(-1))), 1 / n
+        tc, tf = tau(-1), v / acc
+        half = tc + tf
+        om = mp.pi / half
+        contact = (-mp.sin(om * tc) + mp.quad(lambda q: mp.sin(om * tau(q)), [-1, qmax])) / om
+        flight = mp.quad(lambda t: (-1 - v * t + acc * t * t / 2) * mp.cos(om * (tc + t)),
+                         [0, tf])
+        return float(om), float(2 / half * (contact + flight))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("off", [-1e-8, 1e-8, 1e-5])
+def test_orbit_at_contact_loss_onset_against_mpmath(off):
+    # qmax within 1e-8 of the onset qmax_c = (n+1)^(1/n) - 1 on either side: one Gauss rule
+    # over the contact arc before the flight lost up to 1e-4 here (the speed at q = -1
+    # vanishes at onset), and the amplitude root then missed by up to 1e-5
+    n = 1.5
+    qmax = (n + 1) ** (1 / n) - 1 + off
+    om_r, a1_r = _mp_orbit(qmax, n)
+    om, a1, _ = powerlaw_orbit(qmax, n)
+    assert float(om) == pytest.approx(om_r, rel=1e-11)
+    assert float(a1) == pytest.approx(a1_r, rel=1e-11)
+    assert float(backbone_shift(a1_r, n)) == pytest.approx(om_r - 1, abs=1e-11)
+
+
+@pytest.mark.parametrize("n", [1.5, 2.5])
+def test_fine_rules_finite_and_agree_at_contact_loss_onset(n):
+    # 256 nodes used to give NaN (nested nodes next to a turning point rounded onto it:
+    # a zero energy gap), and 48 against 256 nodes differed by up to 1e-5 near the onset
+    qc = (n + 1) ** (1 / n) - 1
+    qs = jnp.array([0.3, qc - 1e-6, qc * (1 - 1e-12), qc + 1e-9, qc + 1e-6, qc + 0.3])
+    coarse = np.asarray(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 48)[:2]))(qs))
+    fine = np.asarray(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 256)[:2]))(qs))
+    assert np.all(np.isfinite(fine))
+    # (the contact arc ending within 1e-12 of q = -1 carries the weak y^(n+1) branch point
+    # of the potential next to its turning point: 48 nodes are within ~1.5e-12 there)
+    np.testing.assert_allclose(coarse, fine, rtol=3e-12)
+    xc = float(powerlaw_orbit(qc * (1 - 1e-12), n)[1])
+    xs = jnp.array([xc - 1e-6, xc - 1e-9, xc + 1e-9, xc + 1e-6])
+    # (just past onset E - P(-1) ~ 1e-9 is a difference rounded at ~1e-16 that enters the
+    # flight time under a square root: a ~3e-12 noise floor of the period, both rules)
+    np.testing.assert_allclose(np.asarray(backbone_shift(xs, n)),
+                               np.asarray(backbone_shift(xs, n, nodes=256)), rtol=0, atol=1e-11)

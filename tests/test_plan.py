@@ -43,8 +43,9 @@ def test_every_builtin_plan_is_valid(plans):
 def test_plans_differ_as_designed(plans):
     paper, strong = plans["paper"], plans["strong_drive"]
     soft, micro = plans["large_soft_bead"], plans["micro_bead"]
-    # paper: JKR by the adhesion map (mu ~ 59, adhesion/load 0.22), no contact loss,
-    # bistable sweeps (Q = 20), forced response by harmonic balance
+    # paper: JKR by the adhesion map (mu ~ 59, adhesion/load 0.22), no contact loss (the
+    # overlap stays above JKR's pull-off overlap), bistable sweeps (Q = 20), forced
+    # response by harmonic balance
     assert paper.contact_law == "JKR" and paper.included("adhesion")
     assert not paper.included("contact_loss") and paper.included("jumps")
     assert paper.rung == "harmonic-balance"
@@ -56,11 +57,15 @@ def test_plans_differ_as_designed(plans):
     assert soft.contact_law == "Hertz" and not soft.included("adhesion")
     assert soft.included("rod") and soft.included("rod_waveguide")
     assert soft.effect("rod").details["k0_cb"] > 1 / 3
-    # micro bead: adhesion dominates, Maugis-Dugdale transition, rod rigid, tiny amplitude
+    # micro bead: adhesion dominates (Maugis-Dugdale transition); f0 = 34 f_rod sits among
+    # the rod's resonances, whose transmissibility moves the measured peak without bound
+    # -> the rod is simulated (all modes), so the forced-response rung
     assert micro.contact_law == "Maugis-Dugdale" and micro.included("adhesion")
     assert micro.effect("adhesion").value > 1e4
-    assert not micro.included("rod") and micro.rung == "small-amplitude-series"
-    assert len({p.rung for p in plans.values()}) >= 3
+    assert micro.included("rod") and micro.included("rod_waveguide")
+    assert micro.effect("rod").error_bound == math.inf
+    assert micro.rung == "harmonic-balance"
+    assert len({p.rung for p in plans.values()}) >= 2
     assert len({tuple(e.included for e in p.effects) for p in plans.values()}) == 4
 
 
@@ -76,8 +81,8 @@ def test_amplitude_override_and_tolerance_monotone():
 
 
 def test_rod_mass_loading_against_two_dof_eigenvalues():
-    """Bead m on contact K0 on a rod mode (M, K_r): the exact lower eigenfrequency of the
-    2-DOF system is lowered by K0 c_b / 2 to first order (the plan's f0 error)."""
+    """Bead m on contact K0 on one rod mode (M, K_r): the plan's single-mode f0 lowering is
+    the exact lower eigenfrequency of the 2-DOF system, and to first order K0 c_b/2."""
     p = plan_scene(scenes.builtin_scene("paper"))
     rod = p.effect("rod").details
     m, k0 = p.numbers["mass_kg"], p.numbers["K0_N_m"]
@@ -87,7 +92,86 @@ def test_rod_mass_loading_against_two_dof_eigenvalues():
     w2 = np.sort(np.linalg.eigvals(np.linalg.solve(mass, stiff)).real)
     rel = math.sqrt(w2[0] * m / k0) - 1
     assert rel < 0
-    assert -rel == pytest.approx(rod["f0_relative_error"], rel=0.1)
+    assert -rel == pytest.approx(rod["f0_relative_error_single_mode"], rel=1e-9)
+    assert -rel == pytest.approx(rod["k0_cb_first_mode"] / 2, rel=0.1)
+
+
+@pytest.mark.parametrize("name", ["paper", "large_soft_bead"])
+def test_rod_coupling_against_continuous_bar(name):
+    """All modes: the bead on its contact on a continuous clamped-free bar (tip receptance
+    tan(kL)/(EA k), EA/L = 8 M omega_r^2/pi^2 from the bar's modal mass M = m_rod/2) has its
+    resonance where m w^2 (1 + K0 tan(kL)/(EA k)) = K0; and with a contact loss factor
+    phi = w/(w0 Q), base drive u through T = sec(kL), the bead's peak |z/u| is the plan's
+    Q_c |T| (viscous Q) or |T| Q (measured Q: Q is then the coupled one): solved directly."""
+    from scipy.optimize import brentq
+
+    sc = scenes.builtin_scene(name)
+    p = plan_scene(sc)
+    rod = p.effect("rod").details
+    m, k0, w0 = p.numbers["mass_kg"], p.numbers["K0_N_m"], 2 * math.pi * p.numbers["f0_Hz"]
+    wr = 2 * math.pi * rod["f_rod_Hz"]
+    ea_l = 8 * rod["modal_mass_kg"] * wr**2 / math.pi**2
+
+    def comp(w):                           # tip compliance of the continuous bar
+        u = 0.5 * math.pi * w / wr
+        return math.tan(u) / (ea_l * u)
+
+    wc = brentq(lambda w: m * w * w * (1 + k0 * comp(w)) - k0, 0.1 * w0, min(w0, 0.999 * wr))
+    assert 1 - wc / w0 == pytest.approx(rod["f0_relative_error"], rel=1e-6)
+    t_c = 1 / math.cos(0.5 * math.pi * wc / wr)
+    assert 1.0 <= p.numbers["rod_transmissibility"] / t_c < 1.01   # (first-mode model: above)
+    if sc.quality_factor is not None:
+        assert p.numbers["amplitude_max_m"] == pytest.approx(
+            sc.quality_factor * p.numbers["rod_transmissibility"] * sc.drive_displacement_max)
+        return
+    q = p.numbers["q"]
+    ws = wc * np.linspace(0.9, 1.1, 200001)
+    k = k0 * (1 + 1j * ws / (w0 * q))
+    c = np.array([comp(w) for w in ws])
+    t = 1 / np.cos(0.5 * np.pi * ws / wr)
+    z = k * t / (k - m * ws**2 * (1 + k * c))
+    peak = np.abs(z).max()
+    ratio = p.numbers["amplitude_max_m"] / (sc.drive_displacement_max * peak)
+    assert 1.0 <= ratio < 1.03             # an upper estimate, and not a loose one
+
+
+@pytest.mark.parametrize("q,r", [(5.0, 0.7), (5.0, 0.4), (20.0, 0.8)])
+def test_pull_of_a_drive_filter_on_the_peak(q, r):
+    """_pull: the maximum of |T(W)| |H(W; W_r)| (H a linear resonance at W_r, quality Q,
+    with fixed Q or fixed bandwidth) moves with W_r by dW_r (1 + F): F found here by brute
+    force for T = sec(pi r W/2) is within the plan's bound, and the bound is not loose."""
+    s = -0.002
+    w = np.linspace(0.95, 1.05, 800001)   # one peak: T's pole 1/r stays outside
+    lt = -np.log(np.cos(0.5 * np.pi * r * w))
+
+    def peak(wr, scaled, filt):
+        damp = w * wr / q if scaled else w / q
+        return w[np.argmax(filt * lt - 0.5 * np.log((wr**2 - w**2) ** 2 + damp**2))]
+
+    u = 0.5 * np.pi * r
+    bound = planmod._pull((u / np.cos(u)) ** 2, u * np.tan(u), 4 * q * q)
+    for scaled in (True, False):
+        moved, bare = (peak(1 + s, scaled, v) - peak(1.0, scaled, v) for v in (1, 0))
+        f = abs(moved - bare) / abs(s)
+        assert f <= bound
+        if scaled:
+            assert f > 0.6 * bound
+    assert planmod._pull(4 * q * q, 0.0, 4 * q * q) == math.inf
+
+
+def test_first_branch_slows_monotonically_towards_rayleigh():
+    """The dispersion bound takes e <= 1 - c_R/c0 above the branch solver's domain: the
+    first branch's phase velocity falls from c0 towards the Rayleigh velocity c_R."""
+    from models import rod
+
+    nu, young, rho, a = 0.27, 200e9, 7700.0, 6e-3
+    assert planmod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
+    vt = math.sqrt(young / (2 * (1 + nu)) / rho)
+    f = np.linspace(1e3, 0.99 * rod.OMEGA_MAX * vt / (2 * math.pi * a), 200)
+    c = np.asarray(rod.first_branch_phase_velocity(f, young=young, poisson=nu, density=rho,
+                                                    radius=a))
+    assert np.all(np.diff(c) < 0)
+    assert c[-1] > planmod._rayleigh_over_vt(nu) * vt
 
 
 def _quadratic_law(alpha, k0=1.0, d0=1.0, f0=1.0):

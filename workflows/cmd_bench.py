@@ -23,6 +23,10 @@ def _run(args: argparse.Namespace) -> int:
     from .cli import host_devices
 
     host_devices(4)  # parallel chains: must precede anything that starts the JAX backend
+    import jax
+
+    # compile times are part of what a benchmark reports: no persistent cache here
+    jax.config.update("jax_compilation_cache_dir", None)
     from inference.sample import configure
 
     configure(4)
