@@ -51,9 +51,7 @@ never an extrapolation. Regenerate the table (deterministic, bit-identical; 35-6
 
 from __future__ import annotations
 
-import argparse
 import pathlib
-import time
 
 import jax
 import jax.numpy as jnp
@@ -61,6 +59,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from ._math import knot_cell
+from ._tables import rebuild_cli
 
 __all__ = [
     "X_MAX",
@@ -279,26 +278,9 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
 
 
 def _main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m models.backbone_table",
-                                description="Tabulated exact backbone for F ~ delta^n.")
-    p.add_argument("--rebuild", action="store_true",
-                   help=f"recompute the table with the exact backbone and write {TABLE_PATH}")
-    p.add_argument("--out", type=pathlib.Path, default=TABLE_PATH,
-                   help="where to write the table (default: the packaged file)")
-    args = p.parse_args(argv)
-    if not args.rebuild:
-        p.print_help()
-        return 0
-    jax.config.update("jax_enable_x64", True)
-    t0 = time.perf_counter()
-    table = build_table()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_name(args.out.name + ".tmp.npz")
-    np.savez(tmp, **table)
-    tmp.replace(args.out)
-    print(f"wrote {args.out} ({args.out.stat().st_size / 1e6:.2f} MB) "
-          f"in {time.perf_counter() - t0:.1f} s")
-    return 0
+    return rebuild_cli(argv, prog="python -m models.backbone_table",
+                       description="Tabulated exact backbone for F ~ delta^n.",
+                       build=build_table, path=TABLE_PATH)
 
 
 if __name__ == "__main__":

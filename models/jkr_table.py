@@ -33,9 +33,7 @@ Regenerate (deterministic)::
 
 from __future__ import annotations
 
-import argparse
 import pathlib
-import time
 
 import jax
 import jax.numpy as jnp
@@ -43,6 +41,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from ._math import knot_cell
+from ._tables import rebuild_cli
 
 __all__ = ["X_MAX", "R_MIN", "R_MAX", "TABLE_PATH", "load_ratio", "shift_first_order_fast",
            "build_table", "load_table", "reference_shift"]
@@ -158,25 +157,9 @@ def shift_first_order_fast(x: ArrayLike, ratio: ArrayLike) -> jnp.ndarray:
 
 
 def _main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m models.jkr_table",
-                                description="Tabulated JKR first-order shift.")
-    p.add_argument("--rebuild", action="store_true",
-                   help=f"recompute the table by quadrature and write {TABLE_PATH}")
-    p.add_argument("--out", type=pathlib.Path, default=TABLE_PATH)
-    args = p.parse_args(argv)
-    if not args.rebuild:
-        p.print_help()
-        return 0
-    jax.config.update("jax_enable_x64", True)
-    t0 = time.perf_counter()
-    table = build_table()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_name(args.out.name + ".tmp.npz")
-    np.savez(tmp, **table)
-    tmp.replace(args.out)
-    print(f"wrote {args.out} ({args.out.stat().st_size / 1e6:.2f} MB) "
-          f"in {time.perf_counter() - t0:.1f} s")
-    return 0
+    return rebuild_cli(argv, prog="python -m models.jkr_table",
+                       description="Tabulated JKR first-order shift.",
+                       build=build_table, path=TABLE_PATH)
 
 
 if __name__ == "__main__":
