@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from models import _plan_rod, scenes
 from models import plan as planmod
-from models import scenes
 from models.plan import EFFECT_NAMES, RUNGS, plan_scene
 
 
@@ -149,14 +149,14 @@ def test_pull_of_a_drive_filter_on_the_peak(q, r):
         return w[np.argmax(filt * lt - 0.5 * np.log((wr**2 - w**2) ** 2 + damp**2))]
 
     u = 0.5 * np.pi * r
-    bound = planmod._pull((u / np.cos(u)) ** 2, u * np.tan(u), 4 * q * q)
+    bound = _plan_rod._pull((u / np.cos(u)) ** 2, u * np.tan(u), 4 * q * q)
     for scaled in (True, False):
         moved, bare = (peak(1 + s, scaled, v) - peak(1.0, scaled, v) for v in (1, 0))
         f = abs(moved - bare) / abs(s)
         assert f <= bound
         if scaled:
             assert f > 0.6 * bound
-    assert planmod._pull(4 * q * q, 0.0, 4 * q * q) == math.inf
+    assert _plan_rod._pull(4 * q * q, 0.0, 4 * q * q) == math.inf
 
 
 def test_first_branch_slows_monotonically_towards_rayleigh():
@@ -165,13 +165,13 @@ def test_first_branch_slows_monotonically_towards_rayleigh():
     from models import rod
 
     nu, young, rho, a = 0.27, 200e9, 7700.0, 6e-3
-    assert planmod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
+    assert _plan_rod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
     vt = math.sqrt(young / (2 * (1 + nu)) / rho)
     f = np.linspace(1e3, 0.99 * rod.OMEGA_MAX * vt / (2 * math.pi * a), 200)
     c = np.asarray(rod.first_branch_phase_velocity(f, young=young, poisson=nu, density=rho,
                                                     radius=a))
     assert np.all(np.diff(c) < 0)
-    assert c[-1] > planmod._rayleigh_over_vt(nu) * vt
+    assert c[-1] > _plan_rod._rayleigh_over_vt(nu) * vt
 
 
 def _quadratic_law(alpha, k0=1.0, d0=1.0, f0=1.0):
