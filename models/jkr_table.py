@@ -117,13 +117,16 @@ def _eval(zk, qk, coef, z, q, fz):
     # fz: z's fractional knot index (closed form of the grading in _grids)
     i, dz = knot_cell(zk, z, fz)
     j, dq = knot_cell(qk, q, (q - qk[0]) / (qk[1] - qk[0]))
+    if q.ndim == 0:
+        # one ratio, many x (the sampler's case): reduce to a 1-D spline in z first
+        # (Horner in dq on the ratio's block), then four 1-D gathers per point and Horner
+        # in dz: no einsum or 2-D gather, which under vmap over particles cost ~2x more
+        # on the CPU (measured 38 vs 20 us per particle for 454 points)
+        blk = jax.lax.dynamic_index_in_dim(jnp.asarray(coef), j, axis=1, keepdims=False)
+        cz = ((blk[0] * dq + blk[1]) * dq + blk[2]) * dq + blk[3]
+        return ((cz[0][i] * dz + cz[1][i]) * dz + cz[2][i]) * dz + cz[3][i]
     pz = jnp.stack([dz**3, dz**2, dz, jnp.ones_like(dz)], axis=-1)
     pq = jnp.stack([dq**3, dq**2, dq, jnp.ones_like(dq)], axis=-1)
-    if q.ndim == 0:
-        # one ratio, many x (the sampler's case): reduce to a 1-D spline in z first,
-        # then gather per point (no (points, 4, 4) blocks per particle under vmap)
-        cz = jnp.einsum("b,baz->az", pq, jnp.asarray(coef)[:, j])
-        return jnp.einsum("a...,...a->...", cz[:, i], pz)
     # advanced indices separated by a slice go first: (..., 4, 4) as [b, a]
     c = jnp.asarray(coef)[:, j, :, i]
     return jnp.einsum("...ba,...b,...a->...", c, pq, pz)
