@@ -13,6 +13,7 @@ import re
 from io import StringIO
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -94,7 +95,8 @@ def compare_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("compare")
     rc = main(["compare", "--out", str(out), "--force",
                "--laws", "hertz,viscoelastic,viscoelastic_split", *TINY,
-               "--evidence", "bridge"])  # nested sampling is run by test_fit_one_law
+               "--evidence", "bridge",  # nested sampling is run by test_fit_one_law
+               "--workers", "2"])  # worker processes (test_workers_same_numbers: in-process)
     assert rc == 0
     return out
 
@@ -139,6 +141,20 @@ def test_compare_refuses_to_overwrite_and_resumes(compare_run, capsys):
     assert main(["compare", "--out", str(out), "--resume", "--laws", "hertz", *TINY,
                  "--evidence", "bridge"]) == 0
     assert (out / "laws" / "hertz.json").stat().st_mtime_ns == before  # reused, not refitted
+
+
+def test_workers_same_numbers(compare_run, tmp_path):
+    """The Hertz fit of compare_run ran in a worker process; in this process it gives the
+    same draws and the same evidence, bit for bit."""
+    import arviz as az
+
+    out = tmp_path / "w1"
+    assert main(["compare", "--out", str(out), "--laws", "hertz", *TINY, "--evidence",
+                 "bridge", "--workers", "1"]) == 0
+    a, b = (json.loads((d / "laws" / "hertz.json").read_text()) for d in (compare_run, out))
+    assert a["log_z"] == b["log_z"] and a["log_z_err"] == b["log_z_err"]
+    pa, pb = (az.from_netcdf(d / "idata" / "hertz.nc").posterior for d in (compare_run, out))
+    np.testing.assert_array_equal(pa["young"].values, pb["young"].values)
 
 
 def test_fit_one_law(tmp_path):

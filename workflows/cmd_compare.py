@@ -36,6 +36,7 @@ def _flags(args: argparse.Namespace) -> dict[str, Any]:
     likelihood = {"robust": True if args.robust else None,
                   "two_percent_rule": False if args.no_two_percent_rule else None}
     return {"data": args.data, "out": args.out, "seed": args.seed, "rung": args.rung,
+            "workers": args.workers,
             "quiet": True if args.quiet else None,
             "laws": _laws(args),
             "sampling": sampling, "evidence": evidence, "likelihood": likelihood}
@@ -93,6 +94,9 @@ def _common(p: argparse.ArgumentParser) -> None:
                    "or the paper's Eq. 25 for the viscoelastic law")
     p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
     p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
+    p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
+                   "processes (default 0: one per usable core, at most 4; 1: no worker "
+                   "processes); the results do not depend on it")
     p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
     p.add_argument("--samples", type=int, help="NUTS draws per chain")
     p.add_argument("--live-points", type=int, help="nested-sampling live points")

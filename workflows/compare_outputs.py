@@ -11,7 +11,7 @@ import numpy as np
 
 from ._io import write_json, write_text
 
-__all__ = ["data_block", "tension", "figures", "write_outputs"]
+__all__ = ["data_block", "tension", "tension_jobs", "nuts_eta", "figures", "write_outputs"]
 
 log = logging.getLogger("beadrod")
 
@@ -33,7 +33,8 @@ def _eta_triple(samples: np.ndarray) -> list[float]:
 ETA_IN_SHIFT = ("paper_eq25",)
 
 
-def _nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str = "eta"):
+def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str = "eta"):
+    """Draws of ``name`` from one viscoelastic NUTS fit (ModelSpec keywords ``spec_kw``)."""
     from inference.numpyro_models import ModelSpec, build_model
     from inference.sample import run_nuts
 
@@ -53,52 +54,77 @@ def _prior_eta(n: int, seed: int) -> np.ndarray:
     return np.asarray(prior("eta", {}).sample(jax.random.PRNGKey(seed), (n,)))
 
 
-def _fit_paper_pair(inputs, ds, cfg, out: Path, lik: str):
-    """Shared- and split-eta viscoelastic fits on the paper's Eq. 25 (bridge evidence)."""
+def _paper_cfg(cfg: dict[str, Any]) -> dict[str, Any]:
+    # the paper pair's log Bayes factor: bridge sampling from the NUTS draws suffices
+    return {**cfg, "evidence": {**cfg["evidence"], "methods": ["bridge"]}}
+
+
+def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str) -> list:
+    """The extra fits the tension needs, as workflows.parallel jobs (keys 'tension:...'):
+    eta from Q alone; under a rung where eta enters the shift, eta from the shift alone;
+    otherwise (and if cfg asks for it) the paper's Eq. 25 shared/split pair and its
+    shift-alone fit."""
     from inference.numpyro_models import ModelSpec
 
-    from .pipeline import fit_law
+    from .parallel import Job
 
-    runs = {}
-    cfg_p = {**cfg, "evidence": {**cfg["evidence"], "methods": ["bridge"]}}
-    for name, mode in (("viscoelastic", "shared"), ("viscoelastic_split", "split")):
-        spec = ModelSpec(law="viscoelastic", eta_mode=mode, rung="paper_eq25", likelihood=lik)
-        runs[name] = fit_law(f"{name}_paper_eq25", spec, inputs, ds, cfg_p, out / "tension")
-    return runs
+    jobs = [Job("tension:eta_q", "eta", "eta_q",
+                {"rung": rung, "likelihood": lik, "use_shift": False}, cfg, seed_offset=12)]
+    shift_alone = {"likelihood": lik, "use_q": False}
+    if rung in ETA_IN_SHIFT:
+        jobs.append(Job(f"tension:eta_shift:{rung}", "eta", "eta_shift",
+                        {"rung": rung, **shift_alone}, cfg, seed_offset=11))
+    elif cfg["tension"].get("paper_rung", True):
+        for name, mode in (("viscoelastic", "shared"), ("viscoelastic_split", "split")):
+            spec = ModelSpec(law="viscoelastic", eta_mode=mode, rung="paper_eq25",
+                             likelihood=lik)
+            jobs.append(Job(f"tension:{name}", "fit", f"{name}_paper_eq25", spec,
+                            _paper_cfg(cfg), str(out / "tension")))
+        jobs.append(Job("tension:eta_shift:paper_eq25", "eta", "eta_shift",
+                        {"rung": "paper_eq25", **shift_alone}, cfg, seed_offset=11))
+    return jobs
 
 
 def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str, Any],
-            out: Path) -> dict[str, Any]:
+            out: Path, done: dict[str, Any] | None = None) -> dict[str, Any]:
     """The Q-versus-shift tension under the comparison's rung and under the paper's Eq. 25.
 
     eta from the shift alone, from Q alone and jointly; their overlap; shared-vs-split
     Bayes factor; which observable the joint fit misses. Under a rung where eta does not
     enter the shift (first order, backbone: the correct physics), the shift-alone
     posterior IS the prior (drawn, not fitted) and the tension is reported as such. The
-    Q-alone fit does not depend on the rung and is shared by both blocks. Returns the
-    block of the comparison's rung with the paper block under 'paper' (if run).
+    Q-alone fit does not depend on the rung and is shared by both blocks. ``done`` holds
+    the results of :func:`tension_jobs` already run (workflows.parallel); what is missing
+    is run here. Returns the block of the comparison's rung with the paper block under
+    'paper' (if run).
     """
+    from .parallel import run_jobs
+
     lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
     rung = runs["viscoelastic"].summary["rung"]
-    log.info("tension: eta from the reference Q alone")
-    eta_q = _nuts_eta({"rung": rung, "likelihood": lik, "use_shift": False}, inputs, cfg, 12)
-    block = _tension_block(runs, inputs, cfg, rung, lik, eta_q, out)
-    if rung not in ETA_IN_SHIFT and cfg["tension"].get("paper_rung", True):
-        log.info("tension: the paper's Eq. 25 (shared and split eta, shift alone)")
-        paper_runs = _fit_paper_pair(inputs, ds, cfg, out, lik)
-        block["paper"] = _tension_block(paper_runs, inputs, cfg, "paper_eq25", lik, eta_q, out)
+    done = dict(done or {})
+    todo = [j for j in tension_jobs(cfg, out, rung, lik) if j.key not in done]
+    if todo:
+        log.info("tension: %s", ", ".join(j.key.removeprefix("tension:") for j in todo))
+        done.update(run_jobs(todo, workers=1, ds=ds, inputs=inputs, resume=False,
+                             log_dir=out, quiet=bool(cfg.get("quiet")), n_devices=1))
+    eta_q = done["tension:eta_q"]
+    block = _tension_block(runs, inputs, cfg, rung, eta_q,
+                           done.get(f"tension:eta_shift:{rung}"), out)
+    if "tension:viscoelastic" in done:
+        paper_runs = {k: done[f"tension:{k}"] for k in ("viscoelastic", "viscoelastic_split")}
+        block["paper"] = _tension_block(paper_runs, inputs, cfg, "paper_eq25", eta_q,
+                                        done["tension:eta_shift:paper_eq25"], out)
     return block
 
 
-def _tension_block(runs, inputs, cfg, rung: str, lik: str, eta_q, out: Path) -> dict[str, Any]:
+def _tension_block(runs, inputs, cfg, rung: str, eta_q, eta_shift,
+                   out: Path) -> dict[str, Any]:
     from inference.tension import bhattacharyya, ppc_failure, prob_greater
 
     shared, split = runs["viscoelastic"], runs["viscoelastic_split"]
     eta_joint = np.asarray(shared.idata.posterior["eta"]).ravel()
-    if rung in ETA_IN_SHIFT:
-        eta_shift = _nuts_eta({"rung": rung, "likelihood": lik, "use_q": False}, inputs,
-                              cfg, 11)
-    else:
+    if rung not in ETA_IN_SHIFT:
         eta_shift = _prior_eta(eta_joint.size, cfg["seed"] + 11)
     post_split = split.idata.posterior
     overlap = bhattacharyya(np.log10(eta_shift), np.log10(eta_q))

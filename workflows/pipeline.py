@@ -222,28 +222,49 @@ def preferred_law(laws: list[dict[str, Any]]) -> tuple[str, str]:
     return best["name"], reason
 
 
+# longest first, so that the last job to finish is a short one (measured on the embedded
+# data: JKR and the baseline cost the most, the viscoelastic pair the least)
+_JOB_ORDER = ("jkr", "baseline", "powerlaw", "hertz", "tension:viscoelastic",
+              "tension:viscoelastic_split", "viscoelastic", "viscoelastic_split")
+
+
 def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
                 law_names: list[str] | None = None) -> dict[str, Any]:
     """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write all
-    outputs into ``out`` and return the result dict the report renders."""
+    outputs into ``out`` and return the result dict the report renders.
+
+    The fits (and the tension's extra fits) run in ``cfg['workers']`` processes side by
+    side (workflows.parallel; 1 = in this process); the numbers do not depend on it."""
     from inference.likelihood import model_inputs
 
     from . import compare_outputs
+    from .parallel import Job, resolve_workers, run_jobs
 
     t_start = time.perf_counter()
     ds = load_data(cfg)
     inputs = model_inputs(ds)
     names = law_names if law_names is not None else cfg["laws"]
-    specs = comparison_specs(names, cfg["rung"], "student_t" if cfg["likelihood"]["robust"]
-                             else "normal")
-    runs: dict[str, LawRun] = {}
-    for name, spec in specs.items():
-        runs[name] = fit_law(name, spec, inputs, ds, cfg, out, resume=resume)
+    lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
+    specs = comparison_specs(names, cfg["rung"], lik)
+    jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
+    do_tension = cfg["tension"]["enabled"] and {"viscoelastic", "viscoelastic_split"} <= set(specs)
+    if do_tension:
+        jobs += compare_outputs.tension_jobs(cfg, out, specs["viscoelastic"].rung, lik)
+    jobs.sort(key=lambda j: _JOB_ORDER.index(j.key) if j.key in _JOB_ORDER else len(_JOB_ORDER))
+    workers = resolve_workers(cfg["workers"], len(jobs))
+    n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
+    if workers > 1:
+        log.info("fitting %d models in %d worker processes", len(jobs), workers)
+    done = run_jobs(jobs, workers=workers, ds=ds, inputs=inputs, resume=resume, log_dir=out,
+                    quiet=bool(cfg.get("quiet")), n_devices=n_dev)
+    runs: dict[str, LawRun] = {name: done[name] for name in specs}
     timings = {f"fit_{k}_s": r.summary["timings"]["total_s"] for k, r in runs.items()}
+    timings["fits_wall_s"] = time.perf_counter() - t_start
+    timings["workers"] = workers
     tension = None
-    if cfg["tension"]["enabled"] and {"viscoelastic", "viscoelastic_split"} <= set(runs):
+    if do_tension:
         t0 = time.perf_counter()
-        tension = compare_outputs.tension(runs, inputs, ds, cfg, out)
+        tension = compare_outputs.tension(runs, inputs, ds, cfg, out, done)
         timings["tension_s"] = time.perf_counter() - t0
     laws = [r.summary for r in runs.values()]
     pref, why = preferred_law(laws)
