@@ -32,8 +32,9 @@ _DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
 @dataclass(frozen=True)
 class Job:
     """One unit of work: ``kind`` "fit" (pipeline.fit_law: NUTS, gate, LOO, evidence,
-    files under ``out``) or "eta" (the eta draws of one extra viscoelastic NUTS fit,
-    compare_outputs.nuts_eta, with ModelSpec keywords ``spec`` and ``seed_offset``)."""
+    files under ``out``), "eta" (the eta draws of one extra viscoelastic NUTS fit,
+    compare_outputs.nuts_eta, with ModelSpec keywords ``spec`` and ``seed_offset``) or
+    "ns" (nested-sampling evidence of ``spec`` with cfg's live points and seed)."""
 
     key: str
     kind: str
@@ -77,13 +78,20 @@ def _run(job: Job, resume: bool, ds: Any = None, inputs: dict | None = None) -> 
         return fit_law(job.name, job.spec, inputs, ds, job.cfg, Path(job.out), resume=resume)
     if job.kind == "eta":
         return compare_outputs.nuts_eta(job.spec, inputs, job.cfg, job.seed_offset)
+    if job.kind == "ns":
+        from inference.evidence import nested_sampling_log_z
+        from inference.numpyro_models import build_model
+
+        return nested_sampling_log_z(build_model(job.spec), {"data": inputs},
+                                     num_live_points=job.cfg["evidence"]["live_points"],
+                                     seed=job.cfg["seed"])
     raise ValueError(f"unknown job kind {job.kind!r}")
 
 
 def _worker(job: Job, resume: bool) -> Any:
     res = _run(job, resume)
     # a LawRun's InferenceData travels through its netCDF file, not through the pipe
-    return ("fit", res.summary) if job.kind == "fit" else ("eta", res)
+    return ("fit", res.summary) if job.kind == "fit" else (job.kind, res)
 
 
 def _init(n_devices: int, log_dir: str, quiet: bool) -> None:
@@ -102,7 +110,8 @@ def _init(n_devices: int, log_dir: str, quiet: bool) -> None:
 def run_jobs(jobs: list[Job], *, workers: int, ds: Any, inputs: dict[str, Any],
              resume: bool, log_dir: Path, quiet: bool, n_devices: int) -> dict[str, Any]:
     """Run ``jobs`` (in the order given, longest first is best) and return key -> result:
-    a pipeline.LawRun for "fit" jobs, the eta draws for "eta" jobs. ``workers`` = 1 runs
+    a pipeline.LawRun for "fit" jobs, the eta draws for "eta" jobs, an EvidenceResult for
+    "ns" jobs. ``workers`` = 1 runs
     them here, one after the other."""
     if workers <= 1:
         return {j.key: _run(j, resume, ds, inputs) for j in jobs}
