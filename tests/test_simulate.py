@@ -2,10 +2,12 @@
 
 import dataclasses
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import ladder
+from models import hbm, ladder
 from models.scenes import builtin_scene
 from models.simulate import PlasticityError, build_simulator
 
@@ -85,3 +87,58 @@ def test_time_integration_agrees_with_harmonic_balance_on_rod_model():
     r_hb, r_ti = hb.run([0.1, 1.0]), ti.run([0.1, 1.0])
     np.testing.assert_allclose(r_ti.up_frequency, r_hb.up_frequency, rtol=2e-3)
     np.testing.assert_allclose(r_ti.up_amplitude, r_hb.up_amplitude, rtol=2e-2)
+
+
+
+def test_peak_past_contact_loss_is_the_least_drive_peak():
+    # past contact loss the sampled Kuwabara-Kono force has an unbounded slope at y = 0 and
+    # the peak's stationarity equation jumps sign without a root: peak() raised here (its
+    # Newton 2-cycled with |R| ~ 1e-3, far above any tolerance)
+    sim = build_simulator(_hertz_scene(50.0), exclude={"rod", "adhesion"},
+                          include={"viscous_losses"}, harmonics=3)
+    law, h, n = sim.dyn.law, sim.harmonics, sim.n_time
+
+    @jax.jit
+    def drive_for(x, om, v0):   # models.hbm (no rod): (X, E) with overlap amplitude x at om
+        def fun(v):
+            return jnp.append(hbm.residual(v[:-1], om, v[-1], law, h, n),
+                              hbm.amplitude(v[:-1]) - x)
+        v = jax.lax.fori_loop(0, 40, lambda _, v: v - jnp.linalg.solve(jax.jacfwd(fun)(v),
+                                                                       fun(v)), v0)
+        return v, jnp.max(jnp.abs(fun(v)))
+
+    shifts = []
+    for x in (0.99, 1.02, 1.05):
+        p = sim.peak(x * sim.delta0, bead=False)
+        assert p["min_overlap"] < 0                      # the contact does open
+        shifts.append(p["shift"])
+        om, e = p["frequency_Hz"] / sim.f0, p["base_displacement_m"] / sim.delta0
+        v, r = drive_for(x, om, jnp.zeros(2 * h + 2).at[1].set(x).at[-1].set(e))
+        assert float(r) < 1e-12 and float(v[-1]) == pytest.approx(e, rel=1e-9)
+        # the peak: any other frequency needs more drive for this amplitude (steps past the
+        # ~1e-4 wide ripple that n = 64 samples leave on E(Omega))
+        for d in (-3e-3, -1e-3, 1e-3, 3e-3):
+            w, r = drive_for(x, om + d, v)
+            assert float(r) < 1e-12 and float(w[-1]) > e
+    assert shifts[0] > shifts[1] > shifts[2]             # softening goes on past contact loss
+
+
+def test_sweep_past_contact_loss_leaves_out_unconverged_points():
+    # JKR's in-contact dashpot jumps at y = 0: at some frequencies the sampled residual has
+    # no root, and the Newton iterate it stopped on was read as a response
+    sim = build_simulator(builtin_scene("paper"), exclude={"rod"})
+    r = sim.run([4.6])
+    assert r.up_amplitude[0] > sim.delta0                # past contact loss
+    assert np.isfinite([r.up_frequency, r.down_frequency, r.up_amplitude]).all()
+    assert any("no converged harmonic-balance solution" in note for note in r.notes)
+
+
+@pytest.mark.slow
+def test_waveguide_peak_past_contact_loss():
+    # the paper's JKR contact with all 256 rod modes, bead amplitude at and past delta0:
+    # the in-contact dashpot's jump at y = 0 left no stationary point (RuntimeError before)
+    sim = build_simulator(builtin_scene("paper"), include={"rod_waveguide"})
+    assert sim.dyn.rho.shape == (256,)
+    peaks = [sim.peak(x * sim.delta0) for x in (1.0, 1.02, 1.05)]
+    assert all(p["min_overlap"] < 0 for p in peaks)
+    assert peaks[0]["shift"] > peaks[1]["shift"] > peaks[2]["shift"]
