@@ -95,7 +95,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
     p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
     p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
-                   "processes (default 0: one per usable core, at most 4; 1: no worker "
+                   "processes (default 0: one per two usable cores, at most 4; 1: no worker "
                    "processes); the results do not depend on it")
     p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
     p.add_argument("--samples", type=int, help="NUTS draws per chain")

@@ -23,8 +23,8 @@ DEFAULTS: dict[str, Any] = {
     "rung": "backbone",  # forward-model rung: first_order | backbone
     "seed": 0,
     "quiet": False,
-    # worker processes for the fits (workflows.parallel): 0 = one per usable core, at most
-    # 4; 1 = all in this process. The numbers do not depend on it, the wall time does.
+    # worker processes for the fits (workflows.parallel): 0 = one per two usable cores, at
+    # most 4; 1 = all in this process. The numbers do not depend on it, the wall time does.
     "workers": 0,
     # 4 x 1000 draws: with 4 x 400 the rank-normalised R-hat of a well-mixed run (ESS ~1000)
     # scattered across the 1.01 gate (measured 1.005-1.014 for Hertz between seeds)
