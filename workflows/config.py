@@ -120,7 +120,7 @@ def resolve(config_file: str | Path | None, flags: dict[str, Any]) -> dict[str, 
     _check({k: v for k, v in flags.items() if v is not None}, DEFAULTS, "", "command line")
     cfg = merge(cfg, flags)
     if cfg["workers"] < 0:
-        raise ConfigError(f"workers must be >= 0 (0 = one per core), got {cfg['workers']}")
+        raise ConfigError(f"workers must be >= 0 (0 = one per two cores), got {cfg['workers']}")
     for m in cfg["evidence"]["methods"]:
         if m not in EVIDENCE_METHODS:
             raise ConfigError(f"unknown evidence method '{m}'{_suggest(m, list(EVIDENCE_METHODS))}"

@@ -51,9 +51,9 @@ def resolve_workers(value: int | None, n_jobs: int) -> int:
     most 4), else the integer given; 1 runs everything in this process.
 
     One per two cores because one fit alone already keeps about two cores busy (NUTS
-    chains and jaxns shards on the host devices): on the 2-core machine two workers
-    finished the full comparison no sooner than one (388 s against 364 s cold; a
-    two-law run 114 s against 136 s)."""
+    chains and jaxns shards on the host devices): on the 2-core machine the full cold
+    comparison took 388 s with two workers against 404 s with one (a two-law run 114 s
+    against 136 s), not worth twice the memory."""
     if not value:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else (os.cpu_count() or 1)
