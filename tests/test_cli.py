@@ -145,18 +145,19 @@ def test_compare_refuses_to_overwrite_and_resumes(compare_run, capsys):
 
 def test_workers_same_numbers(compare_run, tmp_path):
     """The Hertz fit of compare_run ran in a worker process; in this process it gives the
-    same draws, bit for bit, and the same evidence to round-off."""
+    the same draws and the same evidence, to round-off."""
     import arviz as az
 
     out = tmp_path / "w1"
     assert main(["compare", "--out", str(out), "--laws", "hertz", *TINY, "--evidence",
                  "bridge", "--workers", "1"]) == 0
     pa, pb = (az.from_netcdf(d / "idata" / "hertz.nc").posterior for d in (compare_run, out))
-    np.testing.assert_array_equal(pa["young"].values, pb["young"].values)
+    # round-off, not bit for bit: in CI the worker's draws differed from the in-process
+    # ones by up to 6e-9 relative (and the bridge log Z by 7e-7 of 991), though not here;
+    # a real dependence on the worker count would move them by the posterior's width
+    np.testing.assert_allclose(pa["young"].values, pb["young"].values, rtol=1e-6)
     a, b = (json.loads((d / "laws" / "hertz.json").read_text()) for d in (compare_run, out))
-    # the bridge estimate agrees to round-off, not bit for bit: XLA's multi-threaded
-    # reductions may split differently in another process (seen in CI: 7e-7 of 991)
-    assert a["log_z"] == pytest.approx(b["log_z"], rel=1e-12, abs=1e-5)
+    assert a["log_z"] == pytest.approx(b["log_z"], abs=1e-4)
 
 
 def test_fit_one_law(tmp_path):
