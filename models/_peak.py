@@ -16,7 +16,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from ._sweep import _amps, _Dyn, _residual
-from .hbm import _newton
+from .hbm import _bases, _newton
 
 __all__: list[str] = []
 
@@ -65,11 +65,8 @@ def _peak_path(dyn: _Dyn, amps: jnp.ndarray, om0: ArrayLike, e0: ArrayLike, h: i
 
 def _min_overlap(x: np.ndarray, h: int, samples: int = 512) -> np.ndarray:
     """Smallest overlap 1 + q over the cycle [-] of each row of X (..., 2H+1)."""
-    th = 2 * np.pi * np.arange(samples) / samples
-    k = np.arange(1, h + 1)
-    q = (x[..., :1] + x[..., 1::2] @ np.cos(np.outer(k, th))
-         + x[..., 2::2] @ np.sin(np.outer(k, th)))
-    return 1.0 + q.min(-1)
+    basis = np.asarray(_bases(h, samples)[0])  # (samples, 2H+1): q(theta) = basis @ X
+    return 1.0 + (x @ basis.T).min(-1)
 
 
 @partial(jax.jit, static_argnames=("h", "n", "bead"))

@@ -22,13 +22,10 @@ from inference.numpyro_models import (
 )
 from inference.sample import load_idata, run_nuts, save_idata
 from models import hertz, materials
+from models.scenes import builtin_scene
 
-R = 7.938e-3
-STEEL = materials.STAINLESS_STEEL
-SCENE = types.SimpleNamespace(
-    mass=float(materials.bead_mass(R, STEEL.density)),
-    load=float(materials.bead_weight(R, STEEL.density)),
-    radius=R, bead_material=STEEL, rod_material=STEEL)
+R = 7.938e-3  # the paper's bead radius [m]
+SCENE = builtin_scene("paper")  # mass, load, radius, bead and rod materials
 AMPS = np.linspace(5e-9, 40e-9, 5)
 LAW_SPECS = [ModelSpec("hertz"), ModelSpec("powerlaw"), ModelSpec("viscoelastic"),
              ModelSpec("viscoelastic", rung="paper_eq25"),

@@ -66,7 +66,6 @@ Evidence criterion (bridge-sampling errors sigma, combined in quadrature, s = 3 
 
 from __future__ import annotations
 
-import types
 from dataclasses import dataclass
 from typing import Any
 
@@ -80,18 +79,14 @@ from inference.likelihood import design_inputs, simulate
 from inference.numpyro_models import LAWS as INFERENCE_LAWS
 from inference.numpyro_models import build_model
 from inference.sample import run_nuts
-from models import materials, registry
+from models import registry
+from models.scenes import builtin_scene
 from workflows.config import DEFAULTS
 from workflows.pipeline import MODEL_SPECS, comparison_specs
 
 pytestmark = pytest.mark.slow
 
-R = 7.938e-3
-STEEL = materials.STAINLESS_STEEL
-SCENE = types.SimpleNamespace(
-    mass=float(materials.bead_mass(R, STEEL.density)),
-    load=float(materials.bead_weight(R, STEEL.density)),
-    radius=R, bead_material=STEEL, rod_material=STEEL)
+SCENE = builtin_scene("paper")  # mass, load, radius, bead and rod materials
 N_PROTOCOLS = 28
 AMPLITUDES = np.geomspace(3e-9, 42e-9, 8)
 

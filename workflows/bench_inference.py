@@ -136,7 +136,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
 
     from .config import DEFAULTS, merge
     from .parallel import Job, resolve_workers, run_jobs
-    from .pipeline import JOB_ORDER, MODEL_SPECS, PARAM_UNITS, comparison_specs, load_data
+    from .pipeline import MODEL_SPECS, PARAM_UNITS, comparison_specs, job_order, load_data
 
     out_dir = Path(out_dir)
     chains, warm, draws = (2, 30, 30) if quick else (4, 400, 400)
@@ -147,8 +147,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     rows = []
     specs = comparison_specs(list(MODEL_SPECS) if not quick else ["hertz"], "backbone", "normal")
     # nested sampling of every model as compare runs it: side by side in worker processes
-    ns_jobs = sorted((Job(k, "ns", k, v, cfg) for k, v in specs.items()),
-                     key=lambda j: JOB_ORDER.index(j.key) if j.key in JOB_ORDER else 99)
+    ns_jobs = sorted((Job(k, "ns", k, v, cfg) for k, v in specs.items()), key=job_order)
     workers = resolve_workers(cfg["workers"], len(ns_jobs))
     t0 = time.perf_counter()
     ns_all = run_jobs(ns_jobs, workers=workers, ds=ds, inputs=inputs, resume=False,

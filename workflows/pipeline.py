@@ -21,7 +21,7 @@ import numpy as np
 
 from ._io import write_json
 
-__all__ = ["LawRun", "MODEL_SPECS", "JOB_ORDER", "comparison_specs", "load_data", "fit_law",
+__all__ = ["LawRun", "MODEL_SPECS", "job_order", "comparison_specs", "load_data", "fit_law",
            "run_compare"]
 
 log = logging.getLogger("beadrod")
@@ -225,8 +225,13 @@ def preferred_law(laws: list[dict[str, Any]]) -> tuple[str, str]:
 
 # longest first, so that the last job to finish is a short one (measured on the embedded
 # data: JKR and the baseline cost the most, the viscoelastic pair the least)
-JOB_ORDER = ("jkr", "baseline", "powerlaw", "hertz", "tension:viscoelastic",
-              "tension:viscoelastic_split", "viscoelastic", "viscoelastic_split")
+_JOB_ORDER = ("jkr", "baseline", "powerlaw", "hertz", "tension:viscoelastic",
+               "tension:viscoelastic_split", "viscoelastic", "viscoelastic_split")
+
+
+def job_order(job: Any) -> int:
+    """Sort key of a workflows.parallel.Job: the costliest first, unknown keys last."""
+    return _JOB_ORDER.index(job.key) if job.key in _JOB_ORDER else len(_JOB_ORDER)
 
 
 def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
@@ -251,7 +256,7 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     do_tension = cfg["tension"]["enabled"] and {"viscoelastic", "viscoelastic_split"} <= set(specs)
     if do_tension:
         jobs += compare_outputs.tension_jobs(cfg, out, specs["viscoelastic"].rung, lik)
-    jobs.sort(key=lambda j: JOB_ORDER.index(j.key) if j.key in JOB_ORDER else len(JOB_ORDER))
+    jobs.sort(key=job_order)
     workers = resolve_workers(cfg["workers"], len(jobs))
     n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
     if workers > 1:
