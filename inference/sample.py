@@ -85,8 +85,11 @@ def run_nuts(
     """
     # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
     # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
-    kernel = NUTS(model, target_accept_prob=target_accept, max_tree_depth=max_tree_depth,
-                  dense_mass=dense_mass, init_strategy=init_to_median(num_samples=15))
+    def make_kernel():
+        return NUTS(model, target_accept_prob=target_accept, max_tree_depth=max_tree_depth,
+                    dense_mass=dense_mass, init_strategy=init_to_median(num_samples=15))
+
+    kernel = make_kernel()
     method = _chain_method(num_chains, chain_method)
     mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_samples,
                 num_chains=num_chains, chain_method=method, progress_bar=False)
@@ -97,10 +100,12 @@ def run_nuts(
         # a 1+1-iteration run costs the compilation of the same loop and nothing else
         # (run twice: the first call also pays one-off tracing of the model's pieces,
         # which the main run below does not pay again)
-        probe = MCMC(kernel, num_warmup=1, num_samples=1, num_chains=num_chains,
-                     chain_method=method, progress_bar=False)
         costs = []
         for _ in range(2):
+            # a fresh MCMC and kernel each time: re-running one MCMC object, or a kernel
+            # another MCMC initialised, breaks 'vectorized' chains (numpyro 0.22)
+            probe = MCMC(make_kernel(), num_warmup=1, num_samples=1, num_chains=num_chains,
+                         chain_method=method, progress_bar=False)
             tc = time.perf_counter()
             probe.run(k_run, data, extra_fields=("diverging", "energy"))
             jax.block_until_ready(probe.get_samples())

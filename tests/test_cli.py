@@ -81,7 +81,7 @@ def test_simulate_writes_a_loadable_dataset(tmp_path):
     assert main(["validate", str(out)]) == 0
 
 
-@pytest.mark.parametrize("which", ["physics", "inference"])
+@pytest.mark.parametrize("which", ["physics", "inference", "device"])
 def test_bench_quick(tmp_path, which):
     assert main(["bench", which, "--quick", "--quiet", "--out", str(tmp_path)]) == 0
     md = next(tmp_path.glob("*.md")).read_text()

@@ -1,0 +1,164 @@
+"""``beadrod bench device``: what JAX's default backend (CPU or an accelerator) buys.
+
+The same measurements on whichever backend JAX picks (``JAX_PLATFORMS=cpu`` forces the
+CPU), so that one command gives comparable rows on a laptop and on a GPU:
+
+1. NUTS per law on the embedded dataset (4 chains x 400 + 400, as ``bench inference``):
+   compile apart from sampling, smallest bulk ESS, ESS per second; chains run 'parallel'
+   over host devices on the CPU and 'vectorized' on an accelerator (one device), and
+   bridge-sampling evidence from the draws.
+2. Nested sampling (jaxns, compare's live points) of the Hertz model: wall time, which
+   includes jaxns compiling its program.
+3. The simulator's time integration (``models.timeint.swept_sine``: RK4, 128 steps per
+   period, 40 settle + 8 lock-in periods per frequency, 26 frequencies), vmapped over a
+   batch of drive levels: compile and run time, sweeps per second. A sweep is a long
+   sequential loop, so a single sweep gains nothing from an accelerator; a batch runs its
+   sweeps side by side.
+
+Not a CI dependency: CI runs ``--quick`` on the CPU only to check the table is written.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._io import write_text
+
+__all__ = ["run"]
+
+
+def _timed(fn, *args):
+    """(result, compile-and-first-run s, warm run s) of a jitted ``fn``."""
+    import jax
+
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    return out, first, time.perf_counter() - t0
+
+
+def _simulator_rows(batches: tuple[int, ...], n_freq: int, budget_s: float) -> list[dict]:
+    import jax
+    import jax.numpy as jnp
+
+    from models import timeint
+    from models.oscillator import hertz
+
+    law = hertz(0.01)  # Q = 50
+    om = jnp.linspace(0.85, 1.02, n_freq)
+    f = jax.jit(jax.vmap(lambda e: timeint.swept_sine(law, e, om, steps_per_period=128,
+                                                       settle_periods=40,
+                                                       measure_periods=8).amplitude))
+    rows: list[dict] = []
+    per_sweep = None
+    for b in batches:
+        if per_sweep is not None and per_sweep * b > budget_s:
+            rows.append({"task": f"simulator: {b} sweeps", "note": "skipped: over budget"})
+            continue
+        drives = jnp.linspace(2e-4, 1.5e-2, b)  # x up to ~1 at Q = 50
+        amp, first, warm = _timed(f, drives)
+        if not np.all(np.isfinite(np.asarray(amp))):
+            raise RuntimeError("time integration returned non-finite amplitudes")
+        per_sweep = warm / b
+        rows.append({"task": f"simulator: {b} sweeps x {n_freq} frequencies",
+                     "compile_s": first - warm, "run_s": warm, "per_unit_s": per_sweep,
+                     "rate": 1.0 / per_sweep, "rate_unit": "sweeps/s"})
+    return rows
+
+
+def _inference_rows(laws: list[str] | None, chains: int, warm: int, draws: int,
+                    live: int | None, method: str) -> list[dict]:
+    from inference.bridge import bridge_sampling_log_z
+    from inference.evidence import nested_sampling_log_z
+    from inference.likelihood import model_inputs
+    from inference.numpyro_models import build_model
+    from inference.sample import run_nuts
+
+    from .bench_inference import _min_ess
+    from .config import DEFAULTS
+    from .pipeline import PARAM_UNITS, comparison_specs, load_data
+
+    inputs = model_inputs(load_data(DEFAULTS))
+    rows: list[dict] = []
+    for name, spec in comparison_specs(laws, "backbone", "normal").items():
+        model = build_model(spec)
+        fit = run_nuts(model, inputs, num_warmup=warm, num_samples=draws, num_chains=chains,
+                       seed=0, predictive=False, measure_compile=True, chain_method=method)
+        t = fit.timings
+        sampling = t["nuts_s"] - t.get("compile_s", 0.0)
+        if not sampling > 0.05 * t["nuts_s"]:
+            sampling = float("nan")  # the compile probe outlasted the run: not measurable
+        ess = _min_ess(fit.idata, [v for v in fit.idata.posterior.data_vars
+                                   if v in PARAM_UNITS])
+        br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior)
+        rows.append({"task": f"NUTS {name} ({spec.rung}), {chains} chains {method}",
+                     "compile_s": t.get("compile_s"), "run_s": sampling,
+                     "per_unit_s": sampling / ess, "rate": ess / sampling,
+                     "rate_unit": "ESS/s", "log_z": br.log_z, "log_z_err": br.log_z_err,
+                     "note": f"bridge evidence {br.wall_s:.1f} s"})
+    if live is None:
+        return rows
+    model = build_model(comparison_specs(["hertz"], "backbone", "normal")["hertz"])
+    ns = nested_sampling_log_z(model, {"data": inputs}, num_live_points=live)
+    rows.append({"task": f"nested sampling hertz, {live} live points", "run_s": ns.wall_s,
+                 "log_z": ns.log_z, "log_z_err": ns.log_z_err,
+                 "note": "wall time includes jaxns compiling its program"})
+    return rows
+
+
+def _write(out_dir: Path, rows: list[dict], head: str) -> Path:
+    import pandas as pd
+
+    table = pd.DataFrame(rows)
+    stem = Path(out_dir) / head.split(":", 1)[0]
+    write_text(stem.with_suffix(".csv"), table.to_csv(index=False))
+
+    def cell(v: Any) -> str:
+        if v is None or (isinstance(v, float) and not np.isfinite(v)):
+            return "-"
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    cols = list(table.columns)
+    md = [head.split(":", 1)[1], "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    md += ["| " + " | ".join(cell(r.get(c)) for c in cols) + " |"
+           for r in table.to_dict("records")]
+    return write_text(stem.with_suffix(".md"), "\n".join(md) + "\n")
+
+
+def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Path:
+    """Measure on JAX's default backend; write ``bench_device_<platform>.csv`` / ``.md``
+    (rewritten after each stage, so a run cut short keeps what it measured). ``laws``:
+    the NUTS rows (default: every law of the comparison)."""
+    import platform
+
+    import jax
+
+    from .config import DEFAULTS
+
+    dev = jax.devices()[0]
+    plat = dev.platform
+    method = "parallel" if plat == "cpu" and jax.local_device_count() >= 4 else "vectorized"
+    head = (f"bench_device_{plat}:# Device benchmark: {plat} "
+            f"({getattr(dev, 'device_kind', plat)})\n\n"
+            f"JAX {jax.__version__} on {plat}, {jax.local_device_count()} device(s), host "
+            f"{platform.machine()}; compile apart from run (run = a second, warm call for the "
+            "simulator; sampling minus a 1+1-iteration compile probe for NUTS)."
+            + (" QUICK RUN: numbers not meaningful." if quick else ""))
+    if quick:
+        rows = _simulator_rows((1, 4), 4, 30.0)
+        md = _write(out_dir, rows, head)
+        rows += _inference_rows(laws or ["hertz"], 2, 30, 30, None, method)  # no NS
+        return _write(out_dir, rows, head)
+    rows = _simulator_rows((1, 32, 256, 2048), 26, 120.0)
+    md = _write(out_dir, rows, head)
+    for law in laws or [None]:
+        rows += _inference_rows(None if law is None else [law], 4, 400, 400, None, method)
+        md = _write(out_dir, rows, head)
+    rows += _inference_rows([], 4, 400, 400, DEFAULTS["evidence"]["live_points"], method)
+    return _write(out_dir, rows, head) if rows else md
