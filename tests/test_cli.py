@@ -122,6 +122,7 @@ def test_compare_outputs_exist_and_parse(compare_run):
     assert paper["rung"] == "paper_eq25" and paper["eta_in_shift"]
     assert paper["log_bf_split_vs_shared"] is not None
     assert set(json.loads((out / "laws" / "hertz.json").read_text())["evidence"]) == {"bridge"}
+    assert "no cross-check" in (out / "report.md").read_text()  # one estimator: said so
     assert result["data"]["hash"] and len(result["laws"]) == 3
     assert not list(out.rglob("*.part*")), "temporary files left behind"
 
@@ -161,11 +162,15 @@ def test_workers_same_numbers(compare_run, tmp_path):
 
 
 def test_fit_one_law(tmp_path):
-    assert main(["fit", "--law", "hertz", "--out", str(tmp_path / "fit"), *TINY]) == 0
+    assert main(["fit", "--law", "hertz", "--out", str(tmp_path / "fit"), *TINY,
+                 "--evidence", "bridge,ns"]) == 0
     table = pd.read_csv(StringIO((tmp_path / "fit" / "comparison.csv").read_text()))
     assert list(table["law"]) == ["hertz"]
-    ev = json.loads((tmp_path / "fit" / "laws" / "hertz.json").read_text())["evidence"]
-    assert set(ev) == {"ns", "bridge"}  # the two default estimators
+    summary = json.loads((tmp_path / "fit" / "laws" / "hertz.json").read_text())
+    assert set(summary["evidence"]) == {"ns", "bridge"}
+    assert summary["log_z_method"] == "bridge_sampling"  # the first listed ranks
+    assert summary["evidence_agree"] in (True, False)
+    assert "cross-check" not in (tmp_path / "fit" / "report.md").read_text()
 
 
 def test_config_file_and_bad_key(tmp_path, capsys):

@@ -105,7 +105,8 @@ def _common(p: argparse.ArgumentParser) -> None:
                    "error bar)")
     p.add_argument("--evidence", help="comma-separated evidence estimators among ns (nested "
                    "sampling), bridge (bridge sampling from the NUTS draws) and smc "
-                   "(tempered SMC); default ns,bridge")
+                   "(tempered SMC); the first is the one the table ranks by; default bridge "
+                   "(add ,ns for the nested-sampling cross-check: ~3 min more on 2 cores)")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
     p.add_argument("--no-two-percent-rule", action="store_true",
                    help="keep drive steps after the linear resonance drifted by > 2 %%")

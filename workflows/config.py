@@ -35,9 +35,14 @@ DEFAULTS: dict[str, Any] = {
         "live_points": 300,
         "smc_particles": 600,
         "smc_seeds": 3,
-        # ns: nested sampling (jaxns); bridge: bridge sampling from the NUTS draws;
-        # smc: tempered SMC over smc_seeds runs (slow for costly likelihoods)
-        "methods": ["ns", "bridge"],
+        # bridge: bridge sampling from the NUTS draws; ns: nested sampling (jaxns);
+        # smc: tempered SMC over smc_seeds runs (slow for costly likelihoods). The first
+        # listed is the one the table ranks by. Default bridge alone: on the embedded data
+        # it agrees with tempered SMC to 0.02 nat (Hertz 992.71 vs 992.69 +- 0.04, JKR
+        # 883.66 vs 883.65 +- 0.03), while jaxns at 300 live points scatters by 0.3-0.5 nat
+        # between seeds and costs ~13x more (186 s against 14 s for the six models): the
+        # nested-sampling cross-check is opt-in (--evidence bridge,ns).
+        "methods": ["bridge"],
     },
     "likelihood": {
         "robust": False,  # Student-t instead of Gaussian for the shift

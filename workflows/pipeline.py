@@ -157,21 +157,23 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     loo = diagnostics.loo_report(fit.idata)
     ev_cfg = cfg["evidence"]
     estimates = {}
-    if "ns" in ev_cfg["methods"]:
-        log.info("%s: evidence by nested sampling (%d live points)", name, ev_cfg["live_points"])
-        estimates["ns"] = nested_sampling_log_z(model, {"data": inputs},
-                                                num_live_points=ev_cfg["live_points"],
-                                                seed=cfg["seed"])
-    if "bridge" in ev_cfg["methods"]:
-        log.info("%s: evidence by bridge sampling from the NUTS draws", name)
-        estimates["bridge"] = bridge_sampling_log_z(model, {"data": inputs},
-                                                    fit.idata.posterior, seed=cfg["seed"])
-    if "smc" in ev_cfg["methods"]:
-        log.info("%s: evidence by tempered SMC (%d particles x %d seeds)", name,
-                 ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
-        seeds = tuple(range(cfg["seed"], cfg["seed"] + ev_cfg["smc_seeds"]))
-        estimates["smc"] = smc_log_z(model, {"data": inputs},
-                                     num_particles=ev_cfg["smc_particles"], seeds=seeds)
+    for method in ev_cfg["methods"]:  # in the order given: the first is the one that ranks
+        if method == "ns":
+            log.info("%s: evidence by nested sampling (%d live points)", name,
+                     ev_cfg["live_points"])
+            estimates["ns"] = nested_sampling_log_z(model, {"data": inputs},
+                                                    num_live_points=ev_cfg["live_points"],
+                                                    seed=cfg["seed"])
+        elif method == "bridge":
+            log.info("%s: evidence by bridge sampling from the NUTS draws", name)
+            estimates["bridge"] = bridge_sampling_log_z(model, {"data": inputs},
+                                                        fit.idata.posterior, seed=cfg["seed"])
+        elif method == "smc":
+            log.info("%s: evidence by tempered SMC (%d particles x %d seeds)", name,
+                     ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
+            seeds = tuple(range(cfg["seed"], cfg["seed"] + ev_cfg["smc_seeds"]))
+            estimates["smc"] = smc_log_z(model, {"data": inputs},
+                                         num_particles=ev_cfg["smc_particles"], seeds=seeds)
     for k, est in estimates.items():
         timings[f"evidence_{k}_s"] = est.wall_s
     timings["total_s"] = time.perf_counter() - t0

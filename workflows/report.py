@@ -91,6 +91,11 @@ def report_blocks(result: Mapping) -> list[Block]:
     b.append(("table", *_comparison_block(result)))
     b.append(("p", "log Z in nats ± the estimator's own error; Δ log Z against the best "
                    "successful law (errors in quadrature); elpd_loo ± its standard error."))
+    laws = result.get("laws") or []
+    if laws and not any(lw.get("log_z2_method") for lw in laws):
+        b.append(("p", "One evidence estimator only, no cross-check: run again with "
+                       "`--evidence bridge,ns` to add nested sampling (jaxns) beside bridge "
+                       "sampling; the table then says whether the two agree."))
 
     if result.get("tension"):
         b.append(("h", 2, "Viscosity tension: shift versus Q"))
