@@ -137,8 +137,9 @@ def run_nuts(
         # when given together; add them explicitly (shapes: 1 chain x draws).
         pp = az.from_dict(prior_predictive={k: v[None] for k, v in prior_pred.items()})
         idata.extend(pp)
-    timings = {"nuts_s": t2 - t0, "compile_s": compile_s, "predictive_s": t3 - t2,
-               "sampling_s": (t2 - t0 - compile_s) if measure_compile else float("nan")}
+    timings = {"nuts_s": t2 - t0, "predictive_s": t3 - t2}
+    if measure_compile:  # absent otherwise (not NaN: NaN is not JSON)
+        timings.update(compile_s=compile_s, sampling_s=t2 - t0 - compile_s)
     attrs = {"seed": seed, "num_chains": num_chains, "num_warmup": num_warmup,
              "num_samples": num_samples, "chain_method": method, **timings}
     if data_hash is not None:

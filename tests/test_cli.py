@@ -114,6 +114,11 @@ def test_compare_outputs_exist_and_parse(compare_run):
         idata = az.from_netcdf(nc)
         assert {"posterior", "log_likelihood", "observed_data", "sample_stats"} <= set(
             idata.groups())
+    def strict(const):  # NaN / Infinity are not JSON
+        raise AssertionError(f"non-JSON constant {const} in an output file")
+
+    for path in [out / "result.json", *(out / "laws").glob("*.json")]:
+        json.loads(path.read_text(), parse_constant=strict)
     result = json.loads((out / "result.json").read_text())
     assert result["tension"] is not None and "paragraph" in result["tension"]
     # the exact rung leaves eta out of the shift; the paper's Eq. 25 block is run too

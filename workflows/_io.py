@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import tempfile
 from collections.abc import Iterator
@@ -59,8 +60,20 @@ def write_text(target: str | os.PathLike, text: str) -> Path:
     return write_bytes(target, text.encode("utf-8"))
 
 
+def _strict(obj: Any) -> Any:
+    # NaN/inf are not JSON (jq, JavaScript and strict parsers reject them): write null
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict(v) for v in obj]
+    return obj
+
+
 def write_json(target: str | os.PathLike, obj: Any, **kw: Any) -> Path:
-    """Write ``obj`` as indented JSON to ``target`` atomically."""
+    """Write ``obj`` as indented, strict JSON to ``target`` atomically (non-finite floats
+    become null)."""
     kw.setdefault("indent", 2)
     kw.setdefault("sort_keys", True)
-    return write_text(target, json.dumps(obj, **kw) + "\n")
+    return write_text(target, json.dumps(_strict(obj), allow_nan=False, **kw) + "\n")
