@@ -88,16 +88,11 @@ def test_evidence_full_accuracy(analytic):
 
 
 def _contact_design():
-    import types
-
     from inference.likelihood import design_inputs
-    from models import materials
+    from models.scenes import builtin_scene
 
-    st, r = materials.STAINLESS_STEEL, 7.938e-3
-    scene = types.SimpleNamespace(mass=float(materials.bead_mass(r, st.density)),
-                                  load=float(materials.bead_weight(r, st.density)),
-                                  radius=r, bead_material=st, rod_material=st)
-    return design_inputs(scene, n_protocols=4, amplitudes=np.linspace(5e-9, 40e-9, 5))
+    return design_inputs(builtin_scene("paper"), n_protocols=4,
+                         amplitudes=np.linspace(5e-9, 40e-9, 5))
 
 
 def test_evidence_ranks_the_generating_law_first():
