@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -115,20 +114,13 @@ def _inference_rows(laws: list[str] | None, chains: int, warm: int, draws: int,
 def _write(out_dir: Path, rows: list[dict], head: str) -> Path:
     import pandas as pd
 
+    from .bench_inference import _markdown
+
     table = pd.DataFrame(rows)
     stem = Path(out_dir) / head.split(":", 1)[0]
     write_text(stem.with_suffix(".csv"), table.to_csv(index=False))
-
-    def cell(v: Any) -> str:
-        if v is None or (isinstance(v, float) and not np.isfinite(v)):
-            return "-"
-        return f"{v:.4g}" if isinstance(v, float) else str(v)
-
-    cols = list(table.columns)
-    md = [head.split(":", 1)[1], "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    md += ["| " + " | ".join(cell(r.get(c)) for c in cols) + " |"
-           for r in table.to_dict("records")]
-    return write_text(stem.with_suffix(".md"), "\n".join(md) + "\n")
+    md = head.split(":", 1)[1] + "\n\n" + _markdown(table) + "\n"
+    return write_text(stem.with_suffix(".md"), md)
 
 
 def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Path:
