@@ -178,6 +178,25 @@ def test_fit_one_law(tmp_path):
     assert "cross-check" not in (tmp_path / "fit" / "report.md").read_text()
 
 
+def test_rungs_writes_its_tables(tmp_path, capsys):
+    out = tmp_path / "rungs"
+    assert main(["rungs", "--laws", "hertz", "--rungs", "first_order,backbone", "--out",
+                 str(out), "--chains", "2", "--warmup", "40", "--samples", "40",
+                 "--workers", "1", "--quiet"]) == 0
+    table = pd.read_csv(out / "rungs.csv")
+    ev = table[table["table"] == "evidence"]
+    assert list(ev["law"]) == ["hertz"] and list(ev["rung"]) == ["backbone"]
+    assert np.isfinite(ev["delta_log_z"]).all()
+    par = table[table["table"] == "params"]
+    assert "young" in set(par["parameter"]) and np.isfinite(par["move_sd"]).all()
+    res = json.loads((out / "rungs.json").read_text())
+    assert set(res["preferred"]) == {"first_order", "backbone"}
+    assert "Δ log Z" in (out / "rungs.md").read_text()
+    assert (out / "first_order" / "idata" / "hertz.nc").is_file()
+    assert main(["rungs", "--rungs", "backbone", "--out", str(tmp_path / "x")]) == 2
+    assert "two or more distinct rungs" in capsys.readouterr().err
+
+
 def test_config_file_and_bad_key(tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[samplng]\nchains = 2\n")

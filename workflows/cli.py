@@ -15,6 +15,7 @@ __all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES"]
 
 COMMAND_MODULES: tuple[str, ...] = (
     "workflows.cmd_compare",
+    "workflows.cmd_rungs",
     "workflows.cmd_scene",
     "workflows.cmd_shift",
     "workflows.cmd_plan",

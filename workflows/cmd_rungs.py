@@ -1,0 +1,77 @@
+"""``beadrod rungs``: fit every law at two or more forward-model rungs and report how much
+the rung moves each posterior and each evidence (see :mod:`workflows.rungs`)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+
+__all__ = ["register"]
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .cli import UserError, host_devices
+    from .cmd_compare import _check_out, _flags, setup_logging
+    from .config import resolve
+    from .rungs import RUNGS
+
+    rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
+    bad = [r for r in rungs if r not in RUNGS]
+    if bad or len(set(rungs)) < 2:
+        raise UserError(f"--rungs needs two or more distinct rungs among {', '.join(RUNGS)} "
+                        f"(got {args.rungs!r})")
+    args.rung = None
+    cfg = resolve(args.config, _flags(args))
+    n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
+    host_devices(n_dev)  # before JAX starts
+    from inference.sample import configure
+
+    configure(n_dev)
+    out = Path(cfg["out"] if args.out else "beadrod-rungs")
+    _check_out(out, args.force, False)
+    setup_logging(out, cfg["quiet"])
+    from ._io import write_text
+    from .config import to_toml
+    from .rungs import run_rungs
+
+    write_text(out / "config.resolved.toml", to_toml(cfg))
+
+    run_rungs(cfg, out, rungs)
+    logging.getLogger("beadrod").info("written: %s", out / "rungs.md")
+    if not cfg["quiet"]:
+        print((out / "rungs.md").read_text())
+    return 0
+
+
+def register(sub) -> None:
+    from .pipeline import MODEL_SPECS
+    from .rungs import RUNGS
+
+    p = sub.add_parser(
+        "rungs", help="how much the forward-model rung moves each posterior and evidence",
+        description="Fit every law at each given rung (first order: the paper's analysis; "
+        "backbone: exact; paper_eq25: the paper's viscoelastic curve) on the same data and "
+        "write rungs.md/.csv/.json: per parameter the posterior under each rung and its move "
+        "in posterior sds, per law log Z under each rung and its change, and the preferred "
+        "law under each rung.")
+    p.add_argument("--rungs", default="first_order,backbone",
+                   help=f"comma-separated rungs among {', '.join(RUNGS)}; the first is the "
+                   "reference (default: %(default)s)")
+    p.add_argument("--laws", help="comma-separated laws (default: every law but the "
+                   f"baseline, which has no rung: {', '.join(MODEL_SPECS)})")
+    p.add_argument("--data", help="dataset folder (default: the embedded paper_like world)")
+    p.add_argument("--config", help="TOML file setting any option (flags win)")
+    p.add_argument("--out", help="output folder (default: beadrod-rungs)")
+    p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
+    p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
+    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
+    p.add_argument("--samples", type=int, help="NUTS draws per chain")
+    p.add_argument("--workers", type=int, help="worker processes for the fits (default 0: "
+                   "one per two usable cores, at most 4)")
+    p.add_argument("--evidence", help="evidence estimators, as for compare (default bridge)")
+    p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
+    p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder")
+    p.add_argument("--quiet", action="store_true", help="no progress output (log file only)")
+    p.set_defaults(func=_run, live_points=None, smc_particles=None, smc_seeds=None,
+                   no_two_percent_rule=False, law=None)
