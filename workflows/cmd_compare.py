@@ -84,6 +84,17 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_sampling_args(p: argparse.ArgumentParser) -> None:
+    """--seed, --chains, --workers, --warmup, --samples (compare, fit, rungs)."""
+    p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
+    p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
+    p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
+                   "processes (default 0: one per two usable cores, at most 4; 1: no worker "
+                   "processes); the results do not depend on it")
+    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
+    p.add_argument("--samples", type=int, help="NUTS draws per chain")
+
+
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", help="dataset folder (measurements.csv + scene.toml); "
                    "default: the embedded synthetic 'paper_like' dataset")
@@ -92,13 +103,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rung", choices=("first_order", "backbone", "paper_eq25"),
                    help="forward model: exact backbone (default), the paper's first order, "
                    "or the paper's Eq. 25 for the viscoelastic law")
-    p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
-    p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
-    p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
-                   "processes (default 0: one per two usable cores, at most 4; 1: no worker "
-                   "processes); the results do not depend on it")
-    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
-    p.add_argument("--samples", type=int, help="NUTS draws per chain")
+    add_sampling_args(p)
     p.add_argument("--live-points", type=int, help="nested-sampling live points")
     p.add_argument("--smc-particles", type=int, help="tempered-SMC particles")
     p.add_argument("--smc-seeds", type=int, help="independent SMC runs (their spread is the "

@@ -45,6 +45,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
+    from .cmd_compare import add_sampling_args
     from .pipeline import MODEL_SPECS
     from .rungs import RUNGS
 
@@ -58,17 +59,12 @@ def register(sub) -> None:
     p.add_argument("--rungs", default="first_order,backbone",
                    help=f"comma-separated rungs among {', '.join(RUNGS)}; the first is the "
                    "reference (default: %(default)s)")
-    p.add_argument("--laws", help="comma-separated laws (default: every law but the "
-                   f"baseline, which has no rung: {', '.join(MODEL_SPECS)})")
+    p.add_argument("--laws", help=f"comma-separated laws among {', '.join(MODEL_SPECS)} "
+                   "(default: all but the baseline, which has no rung)")
     p.add_argument("--data", help="dataset folder (default: the embedded paper_like world)")
     p.add_argument("--config", help="TOML file setting any option (flags win)")
     p.add_argument("--out", help="output folder (default: beadrod-rungs)")
-    p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
-    p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
-    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
-    p.add_argument("--samples", type=int, help="NUTS draws per chain")
-    p.add_argument("--workers", type=int, help="worker processes for the fits (default 0: "
-                   "one per two usable cores, at most 4)")
+    add_sampling_args(p)
     p.add_argument("--evidence", help="evidence estimators, as for compare (default bridge)")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
     p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder")
