@@ -216,12 +216,33 @@ class Simulator:
                                f"a sweep at base displacement {drive * self.delta0:.3g} m")
         return int(np.nanargmax(ab))
 
+    def _start(self) -> jnp.ndarray:
+        """Rest: the state a sweep starts from."""
+        nm = self.dyn.rho.shape[0]
+        return jnp.zeros(2 + 2 * nm) if self.method == "time-integration" \
+            else jnp.zeros(2 * self.harmonics + 1)
+
+    def curves(self, drive_levels, *, n_freq: int = 81,
+               band: tuple[float, float] | None = None) -> dict:
+        """Frequency-response curves: up and down stepped sweeps over the band [Hz] (default
+        the scene's) at each drive level [V], each from rest. Returns 'frequency_hz' (F,),
+        'drive_volts' (D,), and 'up', 'down' (D, F): bead amplitude delta_a [m] at each
+        frequency, NaN where the harmonic balance had no converged solution."""
+        volts = np.sort(np.atleast_1d(np.asarray(drive_levels, float)))
+        f_lo, f_hi = band if band is not None else (self.scene.f_min, self.scene.f_max)
+        grid = np.linspace(f_lo, f_hi, n_freq) / self.f0
+        up, down = [], []
+        for v in volts:
+            e = v * self.scene.displacement_per_volt / self.delta0
+            up.append(self._sweep(e, grid, self._start())[1] * self.delta0)
+            down.append(self._sweep(e, grid[::-1], self._start())[1][::-1] * self.delta0)
+        return {"frequency_hz": grid * self.f0, "drive_volts": volts,
+                "up": np.asarray(up), "down": np.asarray(down)}
+
     def _resonance(self, drive, grid, n_fine, refine):
         """Sweep ``grid`` in its order, then ``refine`` passes of ``n_fine`` points over
         +-2 steps around the maximum, each starting from the state the sweep had there."""
-        nm = self.dyn.rho.shape[0]
-        start = jnp.zeros(2 + 2 * nm) if self.method == "time-integration" \
-            else jnp.zeros(2 * self.harmonics + 1)
+        start = self._start()
         ys, ab, aq = self._sweep(drive, grid, start)
         dropped = int(np.isnan(ab).sum())
         for _ in range(refine):

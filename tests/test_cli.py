@@ -178,6 +178,20 @@ def test_fit_one_law(tmp_path):
     assert "cross-check" not in (tmp_path / "fit" / "report.md").read_text()
 
 
+def test_sweep_writes_frequency_response_curves(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    out.mkdir()
+    assert main(["sweep", "--drive", "0.05", "1.0", "--n-freq", "9", "--out", str(out)]) == 0
+    assert "left out" in capsys.readouterr().out
+    d = json.loads((out / "sweep.json").read_text())
+    assert len(d["up_frequency"]) == 2
+    frc = pd.read_csv(out / "frc.csv")
+    assert len(frc) == 17 and frc.shape[1] == 1 + 2 * 2
+    amp = frc.drop(columns="frequency_Hz").to_numpy()
+    assert np.nanmax(amp[:, -1]) > np.nanmax(amp[:, 0]) > 0  # more drive, more response
+    assert (out / "frc.png").stat().st_size > 1000 and (out / "frc.pdf").is_file()
+
+
 def test_rungs_writes_its_tables(tmp_path, capsys):
     out = tmp_path / "rungs"
     assert main(["rungs", "--laws", "hertz", "--rungs", "first_order,backbone", "--out",

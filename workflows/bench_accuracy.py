@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from workflows._io import write_bytes, write_text
+from workflows._io import write_text
 
 __all__ = ["run", "X_VALUES"]
 
@@ -122,33 +122,21 @@ def _ti_vs_scipy(quick):
     return rows, om.size
 
 
-def _plot(rows, path):
-    import matplotlib
+def _plot(rows, path: Path) -> None:
+    """accuracy.png and accuracy.pdf: |error| against time per evaluation, per rung."""
+    from .plots import fig_accuracy_cost, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    names = [r for r in dict.fromkeys(r["rung"] for r in rows) if not r.startswith("reference")]
-    for name in names:
-        sel = [r for r in rows if r["rung"] == name]
-        err = np.array([max(abs(r["error"]), 1e-12) for r in sel])
-        t = np.array([max(r["time_s"], 1e-6) for r in sel])
-        ax.loglog(t, err, "o-", label=name, alpha=0.8)
-    ax.set_xlabel("time per evaluation after compilation [s]")
-    ax.set_ylabel("|error of Delta f/f0| vs reference")
-    ax.set_title(f"Accuracy ladder, Hertz, Q = {Q_FACTOR:g}, x = 0.1 ... 1.2")
-    ax.legend(fontsize=7)
-    ax.grid(True, which="both", alpha=0.3)
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=120)
-    plt.close(fig)
-    write_bytes(path, buf.getvalue())
+    table = [{**r, "error": abs(r["error"])} for r in rows
+             if not str(r["rung"]).startswith("reference")]
+    fig = fig_accuracy_cost(table)
+    xs = [float(r["x"]) for r in table]
+    fig.axes[0].set_title(f"What accuracy costs in time: Hertz, Q = {Q_FACTOR:g}, "
+                          f"x = {min(xs):g} ... {max(xs):g}", fontsize=10)
+    save_figure(fig, Path(path).with_suffix(""))
 
 
 def run(out_dir: Path, quick: bool = False) -> Path:
-    """Measure the ladder; write accuracy.csv, accuracy.md, accuracy.png into out_dir."""
+    """Measure the ladder; write accuracy.csv, accuracy.md, accuracy.png/.pdf into out_dir."""
     import jax
 
     jax.config.update("jax_enable_x64", True)

@@ -28,7 +28,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--n-freq", type=int, default=41, help="coarse frequencies per sweep")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
-                   help="also write sweep.json into DIR")
+                   help="also write into DIR: sweep.json, and the frequency-response curves "
+                   "(frc.csv; frc.png and frc.pdf: bead amplitude versus drive frequency, up "
+                   "and down, at each drive level)")
     p.set_defaults(func=run)
     return p
 
@@ -50,6 +52,24 @@ def _text(r) -> str:
     return "\n".join(lines)
 
 
+def _write_curves(out: Path, c: dict) -> None:
+    import numpy as np
+    import pandas as pd
+
+    from workflows._io import write_text
+    from workflows.plots import fig_frc, save_figure
+
+    cols = {"frequency_Hz": c["frequency_hz"]}
+    labels, amps = [], []
+    for i, v in enumerate(c["drive_volts"]):
+        for d in ("up", "down"):
+            cols[f"delta_a_m_{d}_{v:.4g}V"] = c[d][i]
+            labels.append(f"{v:.3g} V {d}")
+            amps.append(c[d][i])
+    write_text(out / "frc.csv", pd.DataFrame(cols).to_csv(index=False))
+    save_figure(fig_frc(np.asarray(c["frequency_hz"]), amps, labels), out / "frc")
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -63,11 +83,14 @@ def run(args: argparse.Namespace) -> int:
         scene, _ = resolve_scene(args.scene, args.builtin)
         drives = args.drive or list(np.geomspace(max(scene.voltage_min, 1e-3 *
                                                      scene.voltage_max), scene.voltage_max, 4))
-        result = build_simulator(scene).run(drives, n_freq=args.n_freq)
+        sim = build_simulator(scene)
+        result = sim.run(drives, n_freq=args.n_freq)
+        curves = sim.curves(drives, n_freq=2 * args.n_freq - 1) if args.out else None
     except (SceneError, ValueError, PlasticityError, RuntimeError) as exc:
         raise UserError(str(exc)) from None
     d = result.to_dict()
     if args.out is not None:
         write_json(args.out / "sweep.json", d)
+        _write_curves(args.out, curves)
     print(json.dumps(d, indent=2) if args.json else _text(result))
     return 0
