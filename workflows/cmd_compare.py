@@ -124,7 +124,8 @@ def _common(p: argparse.ArgumentParser) -> None:
 def register(sub) -> None:
     p = sub.add_parser("compare", help="fit every contact law, compare them, write the report",
                        description="The main job: fit every law by NUTS, check diagnostics, "
-                       "compute LOO and the evidence by two estimators, quantify the "
+                       "compute LOO and the evidence (bridge sampling; --evidence bridge,ns adds a "
+                       "nested-sampling cross-check), quantify the "
                        "Q-versus-shift tension, and write tables, figures and a report.")
     from .pipeline import MODEL_SPECS
 

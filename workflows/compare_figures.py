@@ -143,8 +143,9 @@ def make_figures(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, result: 
             [r["log_z2_err"] for r in laws] if two else None,
             estimators=(laws[0]["log_z_method"], laws[0].get("log_z2_method") or ""),
             failed=[r["status"] != "ok" for r in laws]),
-            "evidence", "log evidence per law relative to the best, with 1-sigma errors from "
-            "both estimators; failed runs hatched.", "comparison")
+            "evidence", "log evidence per law relative to the best, with 1-sigma errors "
+            f"({'both estimators' if two else 'one estimator'}); failed runs hatched.",
+            "comparison")
 
     pref = result.get("preferred")
     if pref in runs:

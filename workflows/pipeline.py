@@ -1,7 +1,7 @@
 """The comparison pipeline behind ``beadrod compare`` and ``beadrod fit``.
 
 CSV -> validated dataset -> one NumPyro model per law (``inference``) -> NUTS +
-diagnostics gate + LOO + evidence by two estimators -> tension analysis ->
+diagnostics gate + LOO + evidence (bridge; NS/SMC on request) -> tension analysis ->
 figures, tables, report. Each finished law is cached in ``OUT/laws/NAME.json``
 with the key (data hash, law config, beadrod version) so ``--resume`` skips it.
 """
