@@ -222,18 +222,23 @@ class Simulator:
         return jnp.zeros(2 + 2 * nm) if self.method == "time-integration" \
             else jnp.zeros(2 * self.harmonics + 1)
 
+    def _levels_and_grid(self, drive_levels, n_freq, band):
+        """Sorted drive levels [V], their base displacements [m] and the sweep grid
+        (Omega = f/f0) over the band [Hz] (default the scene's)."""
+        volts = np.sort(np.atleast_1d(np.asarray(drive_levels, float)))
+        f_lo, f_hi = band if band is not None else (self.scene.f_min, self.scene.f_max)
+        return (volts, volts * self.scene.displacement_per_volt,
+                np.linspace(f_lo, f_hi, n_freq) / self.f0)
+
     def curves(self, drive_levels, *, n_freq: int = 81,
                band: tuple[float, float] | None = None) -> dict:
         """Frequency-response curves: up and down stepped sweeps over the band [Hz] (default
         the scene's) at each drive level [V], each from rest. Returns 'frequency_hz' (F,),
         'drive_volts' (D,), and 'up', 'down' (D, F): bead amplitude delta_a [m] at each
         frequency, NaN where the harmonic balance had no converged solution."""
-        volts = np.sort(np.atleast_1d(np.asarray(drive_levels, float)))
-        f_lo, f_hi = band if band is not None else (self.scene.f_min, self.scene.f_max)
-        grid = np.linspace(f_lo, f_hi, n_freq) / self.f0
+        volts, u, grid = self._levels_and_grid(drive_levels, n_freq, band)
         up, down = [], []
-        for v in volts:
-            e = v * self.scene.displacement_per_volt / self.delta0
+        for e in u / self.delta0:
             up.append(self._sweep(e, grid, self._start())[1] * self.delta0)
             down.append(self._sweep(e, grid[::-1], self._start())[1][::-1] * self.delta0)
         return {"frequency_hz": grid * self.f0, "drive_volts": volts,
@@ -264,10 +269,7 @@ class Simulator:
             band: tuple[float, float] | None = None) -> SimulationResult:
         """Up and down stepped sweeps over the band [Hz] (default the scene's) at each drive
         level [V] (base displacement = V x displacement_per_volt)."""
-        volts = np.sort(np.atleast_1d(np.asarray(drive_levels, float)))
-        u = volts * self.scene.displacement_per_volt
-        f_lo, f_hi = band if band is not None else (self.scene.f_min, self.scene.f_max)
-        grid = np.linspace(f_lo, f_hi, n_freq) / self.f0
+        volts, u, grid = self._levels_and_grid(drive_levels, n_freq, band)
         out = {k: [] for k in ("fu", "fd", "au", "ad", "qu", "qd")}
         dropped = 0
         for ui in u:

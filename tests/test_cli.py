@@ -209,6 +209,10 @@ def test_rungs_writes_its_tables(tmp_path, capsys):
     assert (out / "first_order" / "idata" / "hertz.nc").is_file()
     assert main(["rungs", "--rungs", "backbone", "--out", str(tmp_path / "x")]) == 2
     assert "two or more distinct rungs" in capsys.readouterr().err
+    from inference.numpyro_models import RUNGS
+    from workflows.rungs import RUNGS as CLI_RUNGS
+
+    assert set(CLI_RUNGS) == set(RUNGS)  # the CLI's copy of the list
 
 
 def test_config_file_and_bad_key(tmp_path, capsys):

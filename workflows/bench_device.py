@@ -71,86 +71,86 @@ def _simulator_rows(batches: tuple[int, ...], n_freq: int, budget_s: float) -> l
     return rows
 
 
-def _inference_rows(laws: list[str] | None, chains: int, warm: int, draws: int,
-                    live: int | None, method: str) -> list[dict]:
+def _nuts_rows(names: list[str], inputs: dict, chains: int, warm: int, draws: int,
+               method: str) -> list[dict]:
     from inference.bridge import bridge_sampling_log_z
-    from inference.evidence import nested_sampling_log_z
-    from inference.likelihood import model_inputs
     from inference.numpyro_models import build_model
-    from inference.sample import run_nuts
 
-    from .bench_inference import _min_ess
-    from .config import DEFAULTS
-    from .pipeline import PARAM_UNITS, comparison_specs, load_data
+    from .bench_inference import timed_nuts
+    from .pipeline import comparison_specs
 
-    inputs = model_inputs(load_data(DEFAULTS))
     rows: list[dict] = []
-    for name, spec in comparison_specs(laws, "backbone", "normal").items():
+    for name, spec in comparison_specs(names, "backbone", "normal").items():
         model = build_model(spec)
-        fit = run_nuts(model, inputs, num_warmup=warm, num_samples=draws, num_chains=chains,
-                       seed=0, predictive=False, measure_compile=True, chain_method=method)
-        t = fit.timings
-        sampling = t["nuts_s"] - t.get("compile_s", 0.0)
-        if not sampling > 0.05 * t["nuts_s"]:
-            sampling = float("nan")  # the compile probe outlasted the run: not measurable
-        ess = _min_ess(fit.idata, [v for v in fit.idata.posterior.data_vars
-                                   if v in PARAM_UNITS])
+        fit, compile_s, sampling, ess = timed_nuts(model, inputs, chains, warm, draws, method)
         br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior)
         rows.append({"task": f"NUTS {name} ({spec.rung}), {chains} chains {method}",
-                     "compile_s": t.get("compile_s"), "run_s": sampling,
+                     "compile_s": compile_s, "run_s": sampling,
                      "per_unit_s": sampling / ess, "rate": ess / sampling,
                      "rate_unit": "ESS/s", "log_z": br.log_z, "log_z_err": br.log_z_err,
                      "note": f"bridge evidence {br.wall_s:.1f} s"})
-    if live is None:
-        return rows
-    model = build_model(comparison_specs(["hertz"], "backbone", "normal")["hertz"])
-    ns = nested_sampling_log_z(model, {"data": inputs}, num_live_points=live)
-    rows.append({"task": f"nested sampling hertz, {live} live points", "run_s": ns.wall_s,
-                 "log_z": ns.log_z, "log_z_err": ns.log_z_err,
-                 "note": "wall time includes jaxns compiling its program"})
     return rows
 
 
-def _write(out_dir: Path, rows: list[dict], head: str) -> Path:
+def _ns_row(inputs: dict, live: int) -> dict:
+    from inference.evidence import nested_sampling_log_z
+    from inference.numpyro_models import build_model
+
+    from .pipeline import comparison_specs
+
+    model = build_model(comparison_specs(["hertz"], "backbone", "normal")["hertz"])
+    ns = nested_sampling_log_z(model, {"data": inputs}, num_live_points=live)
+    return {"task": f"nested sampling hertz, {live} live points", "run_s": ns.wall_s,
+            "log_z": ns.log_z, "log_z_err": ns.log_z_err,
+            "note": "wall time includes jaxns compiling its program"}
+
+
+def _write(path: Path, rows: list[dict], header: str) -> Path:
+    """``path``.csv and ``path``.md (``header`` above the table), atomically."""
     import pandas as pd
 
     from .bench_inference import _markdown
 
     table = pd.DataFrame(rows)
-    stem = Path(out_dir) / head.split(":", 1)[0]
-    write_text(stem.with_suffix(".csv"), table.to_csv(index=False))
-    md = head.split(":", 1)[1] + "\n\n" + _markdown(table) + "\n"
-    return write_text(stem.with_suffix(".md"), md)
+    write_text(path.with_suffix(".csv"), table.to_csv(index=False))
+    return write_text(path.with_suffix(".md"), f"{header}\n\n{_markdown(table)}\n")
 
 
 def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Path:
     """Measure on JAX's default backend; write ``bench_device_<platform>.csv`` / ``.md``
     (rewritten after each stage, so a run cut short keeps what it measured). ``laws``:
-    the NUTS rows (default: every law of the comparison)."""
+    the NUTS rows (default: every law of the comparison; quick: Hertz)."""
     import platform
 
     import jax
 
+    from inference.likelihood import model_inputs
+
     from .config import DEFAULTS
+    from .pipeline import MODEL_SPECS, load_data
 
     dev = jax.devices()[0]
     plat = dev.platform
     method = "parallel" if plat == "cpu" and jax.local_device_count() >= 4 else "vectorized"
-    head = (f"bench_device_{plat}:# Device benchmark: {plat} "
-            f"({getattr(dev, 'device_kind', plat)})\n\n"
-            f"JAX {jax.__version__} on {plat}, {jax.local_device_count()} device(s), host "
-            f"{platform.machine()}; compile apart from run (run = a second, warm call for the "
-            "simulator; sampling minus a 1+1-iteration compile probe for NUTS)."
-            + (" QUICK RUN: numbers not meaningful." if quick else ""))
+    path = Path(out_dir) / f"bench_device_{plat}"
+    header = (f"# Device benchmark: {plat} ({getattr(dev, 'device_kind', plat)})\n\n"
+              f"JAX {jax.__version__} on {plat}, {jax.local_device_count()} device(s), host "
+              f"{platform.machine()}; compile apart from run (run = a second, warm call for "
+              "the simulator; sampling minus a 1+1-iteration compile probe for NUTS)."
+              + (" QUICK RUN: numbers not meaningful." if quick else ""))
+    inputs = model_inputs(load_data(DEFAULTS))
     if quick:
-        rows = _simulator_rows((1, 4), 4, 30.0)
-        md = _write(out_dir, rows, head)
-        rows += _inference_rows(laws or ["hertz"], 2, 30, 30, None, method)  # no NS
-        return _write(out_dir, rows, head)
-    rows = _simulator_rows((1, 32, 256, 2048), 26, 120.0)
-    md = _write(out_dir, rows, head)
-    for law in laws or [None]:
-        rows += _inference_rows(None if law is None else [law], 4, 400, 400, None, method)
-        md = _write(out_dir, rows, head)
-    rows += _inference_rows([], 4, 400, 400, DEFAULTS["evidence"]["live_points"], method)
-    return _write(out_dir, rows, head) if rows else md
+        batches, n_freq, budget = (1, 4), 4, 30.0
+        names, (chains, warm, draws) = laws or ["hertz"], (2, 30, 30)
+    else:
+        batches, n_freq, budget = (1, 32, 256, 2048), 26, 120.0
+        names, (chains, warm, draws) = laws or list(MODEL_SPECS), (4, 400, 400)
+    rows = _simulator_rows(batches, n_freq, budget)
+    md = _write(path, rows, header)
+    for name in names:
+        rows += _nuts_rows([name], inputs, chains, warm, draws, method)
+        md = _write(path, rows, header)
+    if not quick:  # nested sampling compiles for ~10 s: not in the smoke run
+        rows.append(_ns_row(inputs, DEFAULTS["evidence"]["live_points"]))
+        md = _write(path, rows, header)
+    return md

@@ -96,11 +96,13 @@ def add_sampling_args(p: argparse.ArgumentParser) -> None:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
+    from .rungs import RUNGS
+
     p.add_argument("--data", help="dataset folder (measurements.csv + scene.toml); "
                    "default: the embedded synthetic 'paper_like' dataset")
     p.add_argument("--config", help="TOML file setting any option below (flags win)")
     p.add_argument("--out", help="output folder (default: beadrod-out)")
-    p.add_argument("--rung", choices=("first_order", "backbone", "paper_eq25"),
+    p.add_argument("--rung", choices=RUNGS,
                    help="forward model: exact backbone (default), the paper's first order, "
                    "or the paper's Eq. 25 for the viscoelastic law")
     add_sampling_args(p)

@@ -13,22 +13,23 @@ __all__ = ["register"]
 def _run(args: argparse.Namespace) -> int:
     from .cli import UserError, host_devices
     from .cmd_compare import _check_out, _flags, setup_logging
-    from .config import resolve
-    from .rungs import RUNGS
+    from .config import DEFAULTS, resolve
+    from .rungs import check_rungs
 
     rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
-    bad = [r for r in rungs if r not in RUNGS]
-    if bad or len(set(rungs)) < 2:
-        raise UserError(f"--rungs needs two or more distinct rungs among {', '.join(RUNGS)} "
-                        f"(got {args.rungs!r})")
-    args.rung = None
+    try:
+        check_rungs(rungs)
+    except ValueError as exc:
+        raise UserError(f"--rungs: {exc}") from None
     cfg = resolve(args.config, _flags(args))
+    if cfg["out"] == DEFAULTS["out"]:  # set neither by flag nor by the config file
+        cfg["out"] = "beadrod-rungs"
     n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
     host_devices(n_dev)  # before JAX starts
     from inference.sample import configure
 
     configure(n_dev)
-    out = Path(cfg["out"] if args.out else "beadrod-rungs")
+    out = Path(cfg["out"])
     _check_out(out, args.force, False)
     setup_logging(out, cfg["quiet"])
     from ._io import write_text
@@ -70,4 +71,4 @@ def register(sub) -> None:
     p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder")
     p.add_argument("--quiet", action="store_true", help="no progress output (log file only)")
     p.set_defaults(func=_run, live_points=None, smc_particles=None, smc_seeds=None,
-                   no_two_percent_rule=False, law=None)
+                   no_two_percent_rule=False, law=None, rung=None)

@@ -18,9 +18,19 @@ from typing import Any
 
 from ._io import write_json, write_text
 
-__all__ = ["RUNGS", "run_rungs", "rung_tables"]
+__all__ = ["RUNGS", "check_rungs", "run_rungs", "rung_tables"]
 
+# inference.numpyro_models.RUNGS, spelled out so that the CLI builds its parsers without
+# importing inference (which starts the JAX backend before the host device count is set);
+# tests/test_cli.py checks the two agree
 RUNGS = ("first_order", "backbone", "paper_eq25")
+
+
+def check_rungs(rungs: list[str]) -> None:
+    """ValueError unless ``rungs`` holds two or more distinct known rungs."""
+    if any(r not in RUNGS for r in rungs) or len(set(rungs)) < 2:
+        raise ValueError(f"give two or more distinct rungs among {', '.join(RUNGS)} "
+                         f"(got {','.join(rungs)!r})")
 
 
 def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any]:
@@ -32,9 +42,7 @@ def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any
     from .parallel import Job, resolve_workers, run_jobs
     from .pipeline import MODEL_SPECS, comparison_specs, load_data, preferred_law
 
-    bad = [r for r in rungs if r not in RUNGS]
-    if bad or len(set(rungs)) < 2:
-        raise ValueError(f"give two or more distinct rungs among {list(RUNGS)} (got {rungs})")
+    check_rungs(rungs)
     t0 = time.perf_counter()
     ds = load_data(cfg)
     inputs = model_inputs(ds)
@@ -103,8 +111,6 @@ def _num(v: Any) -> float:
 
 
 def _fmt(v: Any, spec: str = ".4g") -> str:
-    if isinstance(v, bool):
-        return "same model" if v else ""
     if isinstance(v, float):
         return "-" if not math.isfinite(v) else format(v, spec)
     return str(v)
