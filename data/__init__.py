@@ -1,5 +1,6 @@
-"""beadrod data: dataset format and validation, protocol processing, resonance
-extraction, and the synthetic worlds shipped as the embedded datasets."""
+"""beadrod data: dataset format and validation, plausibility bounds, file I/O (atomic
+writes, strict CSV reading), protocol processing, resonance extraction, and the
+synthetic worlds shipped as the embedded datasets. Imports only ``models``."""
 
 from .extract import CurveFit, extract_resonance, read_curve
 from .load import Dataset, load_dataset, write_dataset

@@ -14,6 +14,7 @@ drive, a jump), the result is flagged.
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .io import read_csv_table
 from .schema import DataError
 
 __all__ = ["CurveFit", "extract_resonance", "read_curve", "CURVE_COLUMNS", "MIN_CURVE_POINTS"]
@@ -129,47 +131,53 @@ def extract_resonance(
 
 
 def read_curve(path: Path, *, label: str | None = None) -> pd.DataFrame:
-    """Read and validate a raw sweep CSV; :class:`DataError` names file, row, column.
+    """Read and validate a raw sweep CSV; :class:`DataError` names file, line, column.
 
     Columns: ``frequency_Hz`` (> 0, strictly increasing or strictly decreasing:
     a down sweep may be stored in sweep order), ``amplitude_m`` (> 0), optional
-    ``phase_rad``. Returned sorted by increasing frequency.
+    ``phase_rad``. Returned sorted by increasing frequency. Messages say what is
+    wrong and where, but never quote the file's content (header names, cells): a
+    curve file is read on the table's say-so and need not be the user's own text.
     """
     label = label or str(path)
-    try:
-        raw = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise DataError(f"{label}, row ?, column '?': cannot parse as CSV ({exc})") from exc
-    cols = [str(c).strip() for c in raw.columns]
-    raw.columns = cols
-    for c in cols:
+    raw = read_csv_table(path, label=label, show_names=False)
+    cols = list(raw.header)
+    for k, c in enumerate(cols):
         if c not in CURVE_COLUMNS:
-            raise DataError(f"{label}, header, column '{c}': unknown column "
-                            f"(allowed: {', '.join(CURVE_COLUMNS)})")
+            near = difflib.get_close_matches(c, CURVE_COLUMNS, n=1, cutoff=0.6)
+            hint = f"; did you mean '{near[0]}'?" if near else ""
+            raise DataError(f"{label}, line {raw.header_line} (header), column {k + 1}: "
+                            f"not a curve column (allowed: {', '.join(CURVE_COLUMNS)}){hint}")
+        if cols.count(c) > 1:
+            raise DataError(f"{label}, line {raw.header_line} (header), column '{c}': "
+                            "column appears twice")
     for c in CURVE_COLUMNS[:2]:
         if c not in cols:
-            raise DataError(f"{label}, header, column '{c}': required column is missing")
-    if len(raw) < MIN_CURVE_POINTS:
-        raise DataError(f"{label}, row {len(raw)}, column 'frequency_Hz': a curve needs at "
-                        f"least {MIN_CURVE_POINTS} points, found {len(raw)}")
+            raise DataError(f"{label}, line {raw.header_line} (header), column '{c}': "
+                            "required column is missing")
+    n = len(raw.records)
+    if n < MIN_CURVE_POINTS:
+        last = raw.lines[-1] if n else raw.header_line
+        raise DataError(f"{label}, line {last}, column 'frequency_Hz': a curve needs at "
+                        f"least {MIN_CURVE_POINTS} points, found {n}")
+    lines = np.asarray(raw.lines)
+    frame = raw.frame()
     out = {}
     for c in cols:
-        vals = pd.to_numeric(raw[c].str.strip(), errors="coerce").to_numpy(np.float64)
+        vals = pd.to_numeric(frame[c], errors="coerce").to_numpy(np.float64)
         bad = np.flatnonzero(~np.isfinite(vals))
         if bad.size:
-            i = int(bad[0])
-            raise DataError(f"{label}, row {i + 1}, column '{c}': not a finite number: "
-                            f"{raw[c].iloc[i]!r}")
+            raise DataError(f"{label}, line {lines[bad[0]]}, column '{c}': not a finite "
+                            "number")
         if c != "phase_rad":
             nonpos = np.flatnonzero(vals <= 0)
             if nonpos.size:
                 i = int(nonpos[0])
-                raise DataError(f"{label}, row {i + 1}, column '{c}': must be positive, "
-                                f"got {vals[i]!r}")
+                raise DataError(f"{label}, line {lines[i]}, column '{c}': must be positive")
         out[c] = vals
     d = np.diff(out["frequency_Hz"])
     if not (np.all(d > 0) or np.all(d < 0)):
         i = int(np.flatnonzero(d <= 0)[0] if np.any(d > 0) else np.flatnonzero(d >= 0)[0])
-        raise DataError(f"{label}, row {i + 2}, column 'frequency_Hz': frequencies must be "
-                        "strictly monotonic (repeated or out-of-order value)")
+        raise DataError(f"{label}, line {lines[i + 1]}, column 'frequency_Hz': frequencies "
+                        "must be strictly monotonic (repeated or out-of-order value)")
     return pd.DataFrame(out).sort_values("frequency_Hz").reset_index(drop=True)

@@ -19,14 +19,9 @@ import numpy as np
 import pandas as pd
 
 from .extract import extract_resonance, read_curve
-from .schema import (
-    AMPLITUDE_LIMIT_FACTOR,
-    DataError,
-    Limits,
-    canonical_csv,
-    curve_path,
-    validate_table,
-)
+from .io import read_csv_table, write_bytes, write_json, write_text
+from .limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
+from .schema import DataError, canonical_csv, curve_path, validate_table, where
 
 __all__ = [
     "Dataset",
@@ -49,7 +44,8 @@ TRUTH = "truth.json"
 @dataclass(frozen=True)
 class Dataset:
     """A validated dataset: the typed table (sorted by protocol, step, direction,
-    with ``row`` = 1-based row in the file and curve-extracted values filled in),
+    with ``row`` = 1-based data row, ``line`` = its line in the file as an editor
+    numbers it, and curve-extracted values filled in),
     the scene, its dict, the optional truth, and a content hash."""
 
     path: Path
@@ -62,28 +58,34 @@ class Dataset:
 
 
 def scene_limits(scene: Any) -> Limits:
-    """Plausibility limits from the scene: sweep band and the amplitude ceiling
-    AMPLITUDE_LIMIT_FACTOR x (Hertz delta0 under the scene's load)."""
-    from models import hertz
+    """Plausibility limits from the scene (:mod:`data.limits`): the sweep band, the
+    amplitude ceiling AMPLITUDE_LIMIT_FACTOR x (Hertz delta0 under the scene's load),
+    the drive range and the scene's bound on Q."""
+    from models import hertz, scenes
 
     delta0 = float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
                                         radius=float(scene.radius)))
-    return Limits(float(scene.f_min), float(scene.f_max), AMPLITUDE_LIMIT_FACTOR * delta0)
+    return Limits(float(scene.f_min), float(scene.f_max), AMPLITUDE_LIMIT_FACTOR * delta0,
+                  float(scene.voltage_min), float(scene.voltage_max),
+                  float(scenes.QUALITY_FACTOR_MAX))
 
 
 def load_scene_file(path: Path) -> tuple[Any, dict]:
-    """(Scene, scene dict) from a scene TOML; any failure becomes a :class:`DataError`."""
+    """(Scene, scene dict) from a scene TOML; any failure becomes a one-line
+    :class:`DataError` that names the file once."""
     from models import scenes
 
-    if not path.is_file():
+    if not path.exists():
         raise DataError(f"{path}: scene file is missing (a dataset folder needs {SCENE})")
+    if not path.is_file():
+        raise DataError(f"{path}: not a file (a dataset folder needs a {SCENE} file)")
     try:
         scene = scenes.load_scene(path)
         return scene, scenes.scene_to_dict(scene)
-    except DataError:
-        raise
-    except Exception as exc:  # the scene loader's own errors, re-labelled with the file
-        raise DataError(f"{path}: invalid scene ({type(exc).__name__}: {exc})") from exc
+    except scenes.SceneError as exc:  # its message already starts with the path
+        raise DataError(str(exc)) from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read the scene ({exc.strerror})") from None
 
 
 def dataset_hash(csv_bytes: bytes, scene_dict: dict) -> str:
@@ -94,50 +96,71 @@ def dataset_hash(csv_bytes: bytes, scene_dict: dict) -> str:
     return h.hexdigest()
 
 
-def _apply_curves(table: pd.DataFrame, folder: Path, file: str) -> list[str]:
+_AGREE = {"f_res_Hz": 1e-4, "amplitude_m": 1e-2, "q_factor": 5e-2}
+"""Relative differences [-] within which a table cell and its curve's extraction count
+as the same reading (a 0.27 Hz rounding at 2.7 kHz, 1 % and 5 % for amplitude and Q:
+about what an analyser's printout rounds away); beyond, the replaced cell is noted."""
+
+
+def _apply_curves(table: pd.DataFrame, folder: Path, file: str, limits: Limits) -> list[str]:
+    """Fill each row that names a curve with the values extracted from it, checked
+    against the same limits as table cells; return notes (fit caveats, replaced cells)."""
     notes: list[str] = []
     table["curve_asymmetric"] = False
     for i in np.flatnonzero((table["curve"].astype(str) != "").to_numpy()):
         rel = str(table.at[i, "curve"])
-        row = int(table.at[i, "row"])
-        p = curve_path(folder, rel)
-        if not p.is_file():
-            raise DataError(f"{file}, row {row}, column 'curve': curve file {rel!r} not found "
-                            f"(looked for {p})")
-        curve = read_curve(p, label=f"{rel} (curve of {file} row {row})")
+        line = int(table.at[i, "line"])
+        place = where(file, line, "curve")
+        try:
+            p = curve_path(folder, rel)
+        except ValueError as exc:
+            raise DataError(f"{place}: {exc}") from None
+        curve = read_curve(p, label=f"{rel} (the curve of {file}, line {line})")
         fit = extract_resonance(curve["frequency_Hz"].to_numpy(), curve["amplitude_m"].to_numpy())
-        table.at[i, "f_res_Hz"] = fit.f_res
-        table.at[i, "amplitude_m"] = fit.amplitude
-        if not math.isnan(fit.q):
-            table.at[i, "q_factor"] = fit.q
+        for col, v in (("f_res_Hz", fit.f_res), ("amplitude_m", fit.amplitude),
+                       ("q_factor", fit.q)):
+            if math.isnan(v):  # no -3 dB Q: the table's Q (if any) stays, fit.note says why
+                continue
+            if (problem := check_value(col, v, limits)) is not None:
+                raise DataError(f"{place}: {col} extracted from {rel}: {problem}")
+            old = float(table.at[i, col])
+            if not math.isnan(old) and abs(v - old) > _AGREE[col] * abs(old):
+                notes.append(f"{file} line {line}: {col} = {show(old)} in the table replaced "
+                             f"by {v:.6g} extracted from {rel}")
+            table.at[i, col] = v
         table.at[i, "curve_asymmetric"] = bool(fit.asymmetric)
         if fit.note:
-            notes.append(f"{file} row {row} ({rel}): {fit.note}")
+            notes.append(f"{file} line {line} ({rel}): {fit.note}")
     return notes
 
 
 def load_dataset(path: str | Path) -> Dataset:
     """Load and validate a dataset folder (or its ``measurements.csv``)."""
     path = Path(path)
+    if path.is_file() and path.suffix != ".csv":
+        raise DataError(f"{path}: expected a dataset folder or its {MEASUREMENTS}")
     folder = path.parent if path.suffix == ".csv" else path
     csv = path if path.suffix == ".csv" else folder / MEASUREMENTS
-    if not csv.is_file():
+    if not csv.exists():
         raise DataError(f"{csv}: measurements file is missing")
+    if not csv.is_file():
+        raise DataError(f"{csv}: not a file (a dataset folder needs a {MEASUREMENTS} file)")
     scene, scene_dict = load_scene_file(folder / SCENE)
-    try:
-        raw = pd.read_csv(csv, dtype=str, keep_default_na=False, skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise DataError(f"{csv}, row ?, column '?': cannot parse as CSV ({exc})") from exc
-    raw.columns = [str(c).strip() for c in raw.columns]
-    table = validate_table(raw, file=csv.name, limits=scene_limits(scene))
-    notes = _apply_curves(table, folder, csv.name)
+    limits = scene_limits(scene)
+    raw = read_csv_table(csv, label=csv.name)
+    table = validate_table(raw.frame(), file=csv.name, limits=limits, lines=raw.lines,
+                           header_line=raw.header_line)
+    notes = _apply_curves(table, folder, csv.name, limits)
     truth = None
-    if (folder / TRUTH).is_file():
+    if (folder / TRUTH).exists():
         try:
-            truth = json.loads((folder / TRUTH).read_text())
+            truth = json.loads((folder / TRUTH).read_text(encoding="utf-8"))
         except json.JSONDecodeError as exc:
-            raise DataError(f"{folder / TRUTH}, row {exc.lineno}, column {exc.colno}: "
-                            f"invalid JSON ({exc.msg})") from exc
+            raise DataError(f"{folder / TRUTH}, line {exc.lineno}, column {exc.colno}: "
+                            f"invalid JSON ({exc.msg})") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DataError(f"{folder / TRUTH}: cannot read as UTF-8 JSON "
+                            f"({type(exc).__name__})") from None
     return Dataset(folder, table, scene, scene_dict, truth,
                    dataset_hash(canonical_csv(table), scene_dict), tuple(notes))
 
@@ -179,8 +202,6 @@ def dump_toml(d: dict, _prefix: str = "") -> str:
 def write_dataset(out_dir: str | Path, table: pd.DataFrame, scene_dict: dict,
                   truth: dict | None = None) -> Path:
     """Write a dataset folder (atomically, file by file); return the folder."""
-    from workflows._io import write_bytes, write_json, write_text
-
     out = Path(out_dir)
     write_bytes(out / MEASUREMENTS, canonical_csv(table))
     write_text(out / SCENE, dump_toml(scene_dict).lstrip("\n"))

@@ -67,7 +67,8 @@ class ProcessedDataset:
     ``drive_direction``: 0 = up, 1 = down. ``q_ref`` is NaN where the first
     reference has no Q, and so is ``drive_inv_q_shift`` for its protocol.
     ``excluded`` lists the excluded drive rows with a ``reason``; ``references``
-    every reference step with f0(n) and its relative drift from f0.
+    every reference step with f0(n) and its relative drift from f0. ``notes`` say
+    which cells the protocol leaves unused (nothing is dropped silently).
     """
 
     protocol_ids: tuple[str, ...]
@@ -91,6 +92,7 @@ class ProcessedDataset:
     references: pd.DataFrame = field(default_factory=pd.DataFrame)
     options: dict = field(default_factory=dict)
     truth: dict | None = None  # truth.json of a synthetic world, else None
+    notes: tuple[str, ...] = ()  # table content the protocol does not use, and why
 
     @property
     def n_drive(self) -> int:
@@ -114,7 +116,7 @@ def _ref_steps(step: np.ndarray, cols: dict[str, np.ndarray]) -> dict[str, np.nd
     steps, start = np.unique(step, return_index=True)
     out = {"step": steps}
     for name, v in cols.items():
-        if name == "row":
+        if name in ("row", "line"):
             out[name] = v[start]
             continue
         finite = ~np.isnan(v)
@@ -150,6 +152,7 @@ def process(
     num = {c: t[c].to_numpy(np.float64) for c in
            ("f_res_Hz", "amplitude_m", "drive_voltage_V", "q_factor")}
     num["row"] = t["row"].to_numpy(np.int64)
+    num["line"] = t["line"].to_numpy(np.int64)
     P = len(pids)
     f0, q_ref, a_ref, v_ref = (np.empty(P) for _ in range(4))
     keep = np.zeros(len(t), dtype=bool)
@@ -165,7 +168,8 @@ def process(
         a_ref[p], v_ref[p] = r["amplitude_m"][0], r["drive_voltage_V"][0]
         drift = r["f_res_Hz"] / f0[p] - 1.0
         ref_parts.append(pd.DataFrame({
-            "protocol": pids[p], "step": r["step"], "row": r["row"], "f0_n_Hz": r["f_res_Hz"],
+            "protocol": pids[p], "step": r["step"], "row": r["row"], "line": r["line"],
+            "f0_n_Hz": r["f_res_Hz"],
             "drift": drift, "q_factor": r["q_factor"]}))
         d_idx = np.arange(i0, i1)[~rmask]
         dstep = step[d_idx]
@@ -178,7 +182,7 @@ def process(
         if two_percent_rule and trips.size:
             s = int(trips[0])
             ok = dstep <= r["step"][s]
-            reason = (f"2 % rule: reference step {int(r['step'][s])} (row {int(r['row'][s])}) "
+            reason = (f"2 % rule: reference step {int(r['step'][s])} (line {int(r['line'][s])}) "
                       f"has f0(n) = {r['f_res_Hz'][s]:.2f} Hz, |f0(n) - f0|/f0 = "
                       f"{abs(drift[s]):.2%} > {threshold:.0%} (f0 = {f0[p]:.2f} Hz)")
             reasons.update({int(i): reason for i in d_idx[~ok]})
@@ -200,11 +204,27 @@ def process(
         drive_voltage=volt, drive_amplitude=amp, drive_f_res=fres,
         drive_shift=shift, drive_inv_q_shift=inv_q, excluded=excluded,
         scene=dataset.scene, data_hash=dataset.data_hash, source=str(dataset.path),
-        truth=dataset.truth,
+        truth=dataset.truth, notes=_unused_notes(t, is_ref),
         references=pd.concat(ref_parts, ignore_index=True),
         options={"two_percent_rule": two_percent_rule, "shift_reference": shift_reference,
                  "threshold": threshold},
     )
+
+
+def _unused_notes(t: pd.DataFrame, is_ref: np.ndarray) -> tuple[str, ...]:
+    """Say so when drive rows carry a Q the protocol never reads: Delta(1/Q) comes from
+    paper Eq. 31 (voltage and amplitude against the first reference), not from the
+    drive sweep's own -3 dB width, which a bent, asymmetric peak makes unreliable."""
+    q_drive = ~is_ref & t["q_factor"].notna().to_numpy()
+    has_curve = (t["curve"].astype(str) != "").to_numpy()
+    typed = q_drive & ~has_curve  # a Q typed in by the user, not one a curve fit produced
+    if not typed.any():
+        return ()
+    lines = sorted(int(x) for x in t["line"].to_numpy()[typed])
+    shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+    return (f"q_factor on {len(lines)} drive rows (line {shown}) is not used: Delta(1/Q) "
+            "comes from paper Eq. 31 (drive voltage and amplitude against the first "
+            "reference)",)
 
 
 def default_path() -> Path:

@@ -3,19 +3,23 @@
 A dataset is a folder holding ``measurements.csv`` (tidy: one row per sweep)
 and ``scene.toml`` (the setup), optionally ``truth.json`` (synthetic data) and
 raw sweep curves. Every check here fails loudly with a :class:`DataError`
-naming the file, the 1-based data row (the header is row 0) and the column:
-nothing is dropped silently.
+naming the file, the line as a text editor numbers it (the header is line 1;
+blank lines count) and the column: nothing is dropped silently. The plausibility
+bounds on values (sweep band, amplitude, drive range, Q, step) are in
+:mod:`data.limits`, with the reason for each.
 """
 
 from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from .limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
 
 __all__ = [
     "DataError",
@@ -29,6 +33,7 @@ __all__ = [
     "validate_table",
     "canonical_csv",
     "curve_path",
+    "where",
 ]
 
 REQUIRED_COLUMNS: tuple[str, ...] = (
@@ -43,137 +48,159 @@ COLUMN_UNITS: dict[str, str] = {
 }
 KINDS: tuple[str, ...] = ("reference", "drive")
 DIRECTIONS: tuple[str, ...] = ("up", "down")
-
-AMPLITUDE_LIMIT_FACTOR = 1000.0
-"""An amplitude above this many static overlaps delta0 (Hertz, under the scene's
-load; ~50 um for the paper's bead) is taken as a unit slip (nm or um written as m):
-at 2.7 kHz it would mean an acceleration above 1000 g on a bead held by its weight."""
+_CSV_SPECIAL = (",", '"', "\n", "\r")  # what canonical CSV cannot write unquoted
 
 
 class DataError(ValueError):
-    """Bad input data; the message names the file, the row and the column."""
+    """Bad input data; the message names the file, the line and the column."""
 
 
-@dataclass(frozen=True)
-class Limits:
-    """Plausibility limits drawn from the scene: resonance band [Hz], amplitude ceiling [m]."""
-
-    f_min: float
-    f_max: float
-    amplitude_max: float
+def where(file: str, line: int | str, column: str) -> str:
+    """``file, line N, column 'c'``: the place an error message starts with."""
+    line_txt = line if isinstance(line, str) else f"line {line}"
+    return f"{file}, {line_txt}, column '{column}'"
 
 
-def _where(file: str, row: int | str, column: str) -> str:
-    row_txt = row if isinstance(row, str) else f"row {row}"
-    return f"{file}, {row_txt}, column '{column}'"
+def _fail(file: str, line: int | str, column: str, what: str) -> DataError:
+    return DataError(f"{where(file, line, column)}: {what}")
 
 
-def _fail(file: str, row: int | str, column: str, what: str) -> DataError:
-    return DataError(f"{_where(file, row, column)}: {what}")
+def _cell(t: str) -> str:
+    # the user's own cell, quoted and cut short: enough to find it, never a page of text
+    return repr(t if len(t) <= 40 else t[:37] + "...")
 
 
-def _check_columns(df: pd.DataFrame, file: str) -> None:
+def _check_columns(df: pd.DataFrame, file: str, header: str) -> None:
     allowed = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
     cols = [str(c) for c in df.columns]
+    dup = [c for c in cols if cols.count(c) > 1]
+    if dup:
+        k = [i + 1 for i, c in enumerate(cols) if c == dup[0]]
+        raise _fail(file, header, dup[0],
+                    f"column appears twice (columns {k[0]} and {k[1]}): keep one")
     for c in cols:
         if c not in allowed:
             near = difflib.get_close_matches(c, allowed, n=1, cutoff=0.5)
             hint = f"; did you mean '{near[0]}'?" if near else ""
-            raise _fail(file, "header", c, f"unknown column (allowed: {', '.join(allowed)}){hint}")
+            raise _fail(file, header, c, f"unknown column (allowed: {', '.join(allowed)}){hint}")
     for c in REQUIRED_COLUMNS:
         if c not in cols:
-            raise _fail(file, "header", c, "required column is missing")
-    dup = [c for c in cols if cols.count(c) > 1]
-    if dup:
-        raise _fail(file, "header", dup[0], "column appears twice")
+            raise _fail(file, header, c, "required column is missing")
 
 
-def _numeric(raw: pd.Series, file: str, column: str, *, allow_empty: bool) -> np.ndarray:
+def _numeric(raw: pd.Series, file: str, column: str, lines: np.ndarray, *,
+             allow_empty: bool) -> np.ndarray:
     text = raw.astype(str).str.strip()
     values = pd.to_numeric(text.where(text != "", None), errors="coerce").to_numpy(np.float64)
     for i, (t, v) in enumerate(zip(text, values, strict=True)):
         if t == "" and allow_empty:
             continue
         if t == "":
-            raise _fail(file, i + 1, column, "value is empty")
+            raise _fail(file, int(lines[i]), column, "value is empty")
         if math.isnan(v) and t.lower() in ("nan", "na", "n/a", "none", "null"):
             if allow_empty:
                 values[i] = np.nan
                 continue
-            raise _fail(file, i + 1, column, f"value is NaN ({t!r})")
+            raise _fail(file, int(lines[i]), column, f"value is NaN ({_cell(t)})")
         if math.isnan(v):
-            raise _fail(file, i + 1, column, f"not a number: {t!r}")
+            raise _fail(file, int(lines[i]), column, f"not a number: {_cell(t)}")
         if not math.isfinite(v):
-            raise _fail(file, i + 1, column, f"value is not finite: {t!r}")
+            raise _fail(file, int(lines[i]), column, f"value is not finite: {_cell(t)}")
     return values
 
 
-def _choice(raw: pd.Series, file: str, column: str, allowed: tuple[str, ...]) -> np.ndarray:
+def _choice(raw: pd.Series, file: str, column: str, allowed: tuple[str, ...],
+            lines: np.ndarray) -> np.ndarray:
     text = raw.astype(str).str.strip()
     for i, t in enumerate(text):
         if t not in allowed:
             near = difflib.get_close_matches(t.lower(), allowed, n=1, cutoff=0.4)
             hint = f"; did you mean '{near[0]}'?" if near else ""
-            raise _fail(file, i + 1, column,
-                        f"unknown value {t!r} (allowed: {', '.join(allowed)}){hint}")
+            raise _fail(file, int(lines[i]), column,
+                        f"unknown value {_cell(t)} (allowed: {', '.join(allowed)}){hint}")
     return text.to_numpy(dtype=object)
 
 
-def validate_table(raw: pd.DataFrame, *, file: str, limits: Limits) -> pd.DataFrame:
+def _text_column(raw: pd.Series, file: str, column: str, lines: np.ndarray) -> np.ndarray:
+    text = raw.astype(str).str.strip()
+    for i, t in enumerate(text):
+        if any(ch in t for ch in _CSV_SPECIAL):
+            raise _fail(file, int(lines[i]), column,
+                        f"{_cell(t)} contains a comma, quote or line break; use plain text "
+                        "(the canonical CSV that is hashed and written cannot hold it)")
+    return text.to_numpy(dtype=object)
+
+
+def validate_table(raw: pd.DataFrame, *, file: str, limits: Limits,
+                   lines: Sequence[int] | None = None, header_line: int = 1) -> pd.DataFrame:
     """Validate a measurement table read as strings; return it typed, in canonical order.
 
-    ``raw`` must come from ``pd.read_csv(..., dtype=str, keep_default_na=False)``
-    so that empty cells and text stay visible to the checks. The returned frame
-    has float64 numeric columns, int64 ``step``, an ``row`` column with the
-    1-based data row in the file, and is sorted by (protocol, step, direction), up before down.
+    ``raw`` holds text cells (:func:`data.io.read_csv_table`, or ``pd.read_csv(...,
+    dtype=str, keep_default_na=False)``) so that empty cells and text stay visible
+    to the checks; ``lines`` gives each record's editor line (default: no blank
+    lines, the header on ``header_line``). The returned frame has float64 numeric
+    columns, int64 ``step``, ``row`` (1-based data row) and ``line`` (editor line)
+    columns, and is sorted by (protocol, step, direction), up before down.
     """
-    _check_columns(raw, file)
+    header = f"line {header_line} (header)"
+    _check_columns(raw, file, header)
     if len(raw) == 0:
-        raise _fail(file, "row 1", "protocol", "the table has no data rows")
+        raise _fail(file, header, "protocol", "the table has no data rows")
+    ln = (np.arange(header_line + 1, header_line + 1 + len(raw), dtype=np.int64)
+          if lines is None else np.asarray(lines, dtype=np.int64))
     out = pd.DataFrame(index=range(len(raw)))
     out["row"] = np.arange(1, len(raw) + 1, dtype=np.int64)
+    out["line"] = ln
 
-    protocol = raw["protocol"].astype(str).str.strip()
+    protocol = _text_column(raw["protocol"], file, "protocol", ln)
     for i, p in enumerate(protocol):
         if p == "" or p.lower() == "nan":
-            raise _fail(file, i + 1, "protocol", "protocol id is empty")
-    out["protocol"] = protocol.to_numpy(dtype=object)
+            raise _fail(file, int(ln[i]), "protocol", "protocol id is empty")
+    out["protocol"] = protocol
 
-    step = _numeric(raw["step"], file, "step", allow_empty=False)
+    step = _numeric(raw["step"], file, "step", ln, allow_empty=False)
     for i, s in enumerate(step):
         if s != round(s) or s < 0:
-            raise _fail(file, i + 1, "step", f"step must be a non-negative integer, got {s!r}")
+            raise _fail(file, int(ln[i]), "step",
+                        f"step must be a non-negative integer, got {show(s)}")
+        if (problem := check_value("step", s, limits)) is not None:
+            raise _fail(file, int(ln[i]), "step", problem)
     out["step"] = step.astype(np.int64)
-    out["kind"] = _choice(raw["kind"], file, "kind", KINDS)
-    out["direction"] = _choice(raw["direction"], file, "direction", DIRECTIONS)
+    out["kind"] = _choice(raw["kind"], file, "kind", KINDS, ln)
+    out["direction"] = _choice(raw["direction"], file, "direction", DIRECTIONS, ln)
 
+    has_curve = None
+    if "curve" in raw.columns:
+        # a row with a raw curve may leave the extracted quantities blank
+        has_curve = raw["curve"].astype(str).str.strip() != ""
     for col in ("drive_voltage_V", "f_res_Hz", "amplitude_m"):
-        has_curve = None
-        if "curve" in raw.columns and col != "drive_voltage_V":
-            # a row with a raw curve may leave the extracted quantities blank
-            has_curve = raw["curve"].astype(str).str.strip() != ""
-        vals = _numeric(raw[col], file, col, allow_empty=has_curve is not None)
+        may_be_empty = has_curve is not None and col != "drive_voltage_V"
+        vals = _numeric(raw[col], file, col, ln, allow_empty=may_be_empty)
         for i, v in enumerate(vals):
             if math.isnan(v):
-                if has_curve is None or not has_curve.iloc[i]:
-                    raise _fail(file, i + 1, col, "value is empty (and no curve to extract it)")
+                if not may_be_empty or not has_curve.iloc[i]:
+                    raise _fail(file, int(ln[i]), col,
+                                "value is empty (and no curve to extract it)")
                 continue
             if v <= 0:
-                raise _fail(file, i + 1, col, f"must be positive, got {v!r}")
+                raise _fail(file, int(ln[i]), col, f"must be positive, got {show(v)}")
+            if (problem := check_value(col, v, limits)) is not None:
+                raise _fail(file, int(ln[i]), col, problem)
         out[col] = vals
-    _check_scales(out, file, limits)
 
     if "q_factor" in raw.columns:
-        q = _numeric(raw["q_factor"], file, "q_factor", allow_empty=True)
+        q = _numeric(raw["q_factor"], file, "q_factor", ln, allow_empty=True)
         for i, v in enumerate(q):
             if not math.isnan(v) and v <= 0.5:
-                raise _fail(file, i + 1, "q_factor",
-                            f"a resonance needs Q > 1/2, got {v!r}")
+                raise _fail(file, int(ln[i]), "q_factor",
+                            f"a resonance needs Q > 1/2, got {show(v)}")
+            if (problem := check_value("q_factor", v, limits)) is not None:
+                raise _fail(file, int(ln[i]), "q_factor", problem)
         out["q_factor"] = q
     else:
         out["q_factor"] = np.full(len(raw), np.nan)
     if "curve" in raw.columns:
-        out["curve"] = raw["curve"].astype(str).str.strip().to_numpy(dtype=object)
+        out["curve"] = _text_column(raw["curve"], file, "curve", ln)
     else:
         out["curve"] = np.array([""] * len(raw), dtype=object)
 
@@ -183,19 +210,6 @@ def validate_table(raw: pd.DataFrame, *, file: str, limits: Limits) -> pd.DataFr
     return order.drop(columns="_d").reset_index(drop=True)
 
 
-def _check_scales(out: pd.DataFrame, file: str, limits: Limits) -> None:
-    for i, f in enumerate(out["f_res_Hz"]):
-        if not math.isnan(f) and not limits.f_min <= f <= limits.f_max:
-            raise _fail(file, i + 1, "f_res_Hz",
-                        f"{f!r} Hz lies outside the scene's sweep band "
-                        f"[{limits.f_min:g}, {limits.f_max:g}] Hz (kHz written as Hz?)")
-    for i, a in enumerate(out["amplitude_m"]):
-        if not math.isnan(a) and a > limits.amplitude_max:
-            raise _fail(file, i + 1, "amplitude_m",
-                        f"{a!r} m exceeds {limits.amplitude_max:.3g} m "
-                        f"({AMPLITUDE_LIMIT_FACTOR:g} static overlaps): nm or um written as m?")
-
-
 def _check_structure(out: pd.DataFrame, file: str) -> None:
     key = out[["protocol", "step", "direction"]]
     later = key.duplicated(keep="first").to_numpy()
@@ -203,26 +217,26 @@ def _check_structure(out: pd.DataFrame, file: str) -> None:
         i = int(np.flatnonzero(later)[0])
         p, s, d = key.iloc[i]
         same = (out["protocol"] == p) & (out["step"] == s) & (out["direction"] == d)
-        raise _fail(file, int(out["row"].iloc[i]), "step",
+        raise _fail(file, int(out["line"].iloc[i]), "step",
                     f"duplicate (protocol, step, direction) = ({p}, {s}, {d}), "
-                    f"first seen in row {int(out.loc[same, 'row'].iloc[0])}")
+                    f"first seen on line {int(out.loc[same, 'line'].iloc[0])}")
     kinds = out.groupby(["protocol", "step"], sort=False)["kind"].transform("nunique")
     if (kinds > 1).any():
         i = int(np.flatnonzero((kinds > 1).to_numpy())[-1])
-        raise _fail(file, int(out["row"].iloc[i]), "kind",
+        raise _fail(file, int(out["line"].iloc[i]), "kind",
                     f"protocol {out['protocol'].iloc[i]!r}, step {out['step'].iloc[i]} "
                     "mixes reference and drive sweeps")
     is_ref = out["kind"] == "reference"
     has_ref = is_ref.groupby(out["protocol"], sort=False).transform("any")
     if not has_ref.all():
         i = int(np.flatnonzero(~has_ref.to_numpy())[0])
-        raise _fail(file, int(out["row"].iloc[i]), "kind",
+        raise _fail(file, int(out["line"].iloc[i]), "kind",
                     f"protocol {out['protocol'].iloc[i]!r} has no reference sweep")
     first_ref = out["step"].where(is_ref).groupby(out["protocol"], sort=False).transform("min")
     early = (~is_ref & (out["step"] < first_ref)).to_numpy()
     if early.any():
         i = int(np.flatnonzero(early)[0])
-        raise _fail(file, int(out["row"].iloc[i]), "step",
+        raise _fail(file, int(out["line"].iloc[i]), "step",
                     f"protocol {out['protocol'].iloc[i]!r}: drive step {out['step'].iloc[i]} "
                     f"comes before the first reference sweep (step {int(first_ref.iloc[i])})")
 
@@ -257,6 +271,25 @@ def canonical_csv(table: pd.DataFrame) -> bytes:
 
 
 def curve_path(dataset_dir: Path, value: str) -> Path:
-    """Resolve a ``curve`` cell relative to the dataset folder."""
+    """The file a ``curve`` cell names: a relative path that resolves (symlinks
+    followed) to a regular file inside the dataset folder.
+
+    Raises ValueError saying why otherwise (absolute, escaping the folder by
+    ``..`` or a symlink, missing, not a regular file): a dataset must not read
+    files it does not hold, and a folder must stay valid when moved.
+    """
     p = Path(value)
-    return p if p.is_absolute() else dataset_dir / p
+    if p.is_absolute():
+        raise ValueError(f"{value!r} is an absolute path; a curve file must lie inside the "
+                         "dataset folder, named relative to it")
+    root = Path(dataset_dir).resolve()
+    target = (root / p).resolve()
+    if not target.is_relative_to(root):
+        raise ValueError(f"{value!r} leads outside the dataset folder (by '..' or a "
+                         "symlink); a curve file must lie inside the dataset folder")
+    if not target.exists():
+        raise ValueError(f"curve file {value!r} not found in the dataset folder "
+                         f"(looked for {root / p})")
+    if not target.is_file():
+        raise ValueError(f"curve {value!r} is not a file")
+    return target

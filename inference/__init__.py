@@ -3,6 +3,8 @@ model comparison, the Q-versus-shift tension and simulation-based calibration.
 
 Entry points call :func:`inference.sample.configure` before JAX initialises (host
 devices for parallel chains, float64). Importing this package does not import jaxns.
+Nothing here writes files or plots: it returns InferenceData and arrays, and
+``workflows`` persists them (workflows.idata_io, workflows.sbc_outputs).
 """
 
 from .compare import DataHashMismatch, evidence_table, log_bayes_factor, loo_table
@@ -25,13 +27,13 @@ from .numpyro_models import (
     curve_draws,
     paper_spec,
 )
-from .sample import FitResult, configure, load_idata, run_nuts, save_idata
+from .sample import FitResult, configure, describe, idata_coords, run_nuts
 
 __all__ = [
     "LAWS", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",
     "MeasuredF0", "curve_draws",
     "model_inputs", "design_inputs", "simulate", "without_observations",
-    "configure", "run_nuts", "FitResult", "save_idata", "load_idata",
+    "configure", "run_nuts", "FitResult", "idata_coords", "describe",
     "check", "Verdict", "DiagnosticsFailed", "loo_report",
     "EvidenceResult", "nested_sampling_log_z", "smc_log_z", "combined_agreement",
     "linear_gaussian_log_evidence",

@@ -48,7 +48,7 @@ import numpy as np
 from numpyro.infer.util import potential_energy, unconstrain_fn
 from scipy.special import logsumexp
 
-from .evidence import EvidenceResult, _latent_site_names
+from .evidence import EvidenceResult, latent_site_names
 
 __all__ = ["bridge_sampling_log_z"]
 
@@ -99,7 +99,7 @@ def bridge_sampling_log_z(
     """
     model_kwargs = model_kwargs or {}
     t0 = time.perf_counter()
-    latents = _latent_site_names(model, model_kwargs)
+    latents = latent_site_names(model, model_kwargs)
     missing = [k for k in latents if k not in posterior]
     if missing:
         raise KeyError(f"posterior draws lack the latent site(s) {missing}")

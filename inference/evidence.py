@@ -34,6 +34,7 @@ __all__ = [
     "smc_log_z",
     "combined_agreement",
     "observed_site_names",
+    "latent_site_names",
     "linear_gaussian_log_evidence",
 ]
 
@@ -64,7 +65,8 @@ def observed_site_names(model: Callable, model_kwargs: dict | None = None) -> li
     return [k for k, s in tr.items() if s["type"] == "sample" and s["is_observed"]]
 
 
-def _latent_site_names(model: Callable, model_kwargs: dict) -> list[str]:
+def latent_site_names(model: Callable, model_kwargs: dict) -> list[str]:
+    """Names of the latent (unobserved) sample sites of ``model(**model_kwargs)``."""
     tr = handlers.trace(handlers.seed(model, 0)).get_trace(**model_kwargs)
     return [k for k, s in tr.items() if s["type"] == "sample" and not s["is_observed"]]
 
@@ -152,7 +154,7 @@ def smc_log_z(
 
     model_kwargs = model_kwargs or {}
     log_prior, log_lik = _split_log_density(model, model_kwargs)
-    latents = _latent_site_names(model, model_kwargs)
+    latents = latent_site_names(model, model_kwargs)
 
     t0 = time.perf_counter()
     key0 = jax.random.PRNGKey(int(seeds[0]))

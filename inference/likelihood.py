@@ -17,7 +17,7 @@ import numpyro
 import numpyro.distributions as dist
 
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
-           "design_inputs", "simulate",
+           "design_inputs", "simulate", "scene_quantities",
            "OBSERVED_SITES"]
 
 OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs")
@@ -55,7 +55,20 @@ def model_inputs(ds: Any) -> dict[str, Any]:
         "radius": float(sc.radius),
         "nu_bead": float(sc.bead_material.poisson),
         "nu_rod": float(sc.rod_material.poisson),
+        "scene": scene_quantities(sc),
     }
+
+
+def scene_quantities(sc: Any) -> dict[str, float]:
+    """The scene quantities a contact law may ask for by name (models.law.SCENE_KEYS):
+    radius [m], young [Pa] and poisson [-] of the bead (bead and rod are taken to be the
+    same material), load [N], mass [kg], gravity [m/s^2], roughness_rms [m],
+    surface_energy [J/m^2]."""
+    return {"radius": float(sc.radius), "young": float(sc.bead_material.young),
+            "poisson": float(sc.bead_material.poisson), "load": float(sc.load),
+            "mass": float(sc.mass), "gravity": float(sc.gravity),
+            "roughness_rms": float(sc.roughness_rms),
+            "surface_energy": float(sc.surface_energy)}
 
 
 def without_observations(inputs: dict[str, Any]) -> dict[str, Any]:
@@ -119,6 +132,7 @@ def design_inputs(scene: Any, *, n_protocols: int, amplitudes: Any,
         "mass": float(scene.mass), "load": float(scene.load), "radius": float(scene.radius),
         "nu_bead": float(scene.bead_material.poisson),
         "nu_rod": float(scene.rod_material.poisson),
+        "scene": scene_quantities(scene),
     }
 
 

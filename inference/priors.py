@@ -3,24 +3,12 @@
 Every prior has an inverse CDF (numpyro's nested-sampling wrapper reparameterises each
 latent site to Uniform(0, 1) through it), and all are proper (evidence needs that).
 
-- ``young`` E ~ Uniform(150, 250) GPa: austenitic/martensitic stainless and carbon
-  steels span roughly 180-215 GPa (paper: 190-210 GPa); the wider band leaves room for
-  near-surface damage and grade uncertainty without admitting non-steels.
-- ``eta`` ~ LogUniform(1e2, 1e8) Pa s: the viscosity is unknown over decades. The
-  paper's shift fit gives 1.05e6 Pa s, its measured Q = 20-100 implies 5e4-3e5 Pa s;
-  the interval brackets both by more than two decades either way (scale-invariant).
-  Sampled through its log: :class:`LogUniformLogit` maps the unconstrained value u to
-  eta = exp(log lo + (log hi - log lo) sigmoid(u)), so u is logistic a priori. numpyro's
+- The contact laws' own parameters (``young``, ``eta``, ``n``, ``gamma``, ...) carry their
+  priors, with the physical justification, in their law objects (``models/<law>.py``,
+  :class:`models.law.Param`); :func:`to_distribution` turns them into NumPyro
+  distributions (a LogUniform is sampled through its log: :class:`LogUniformLogit`; numpyro's
   plain LogUniform maps u through sigmoid on eta itself, where the prior mass of the
-  lower decades sits at u < -10 (a funnel: ESS 3 for an eta the data do not pin).
-- ``n`` ~ Uniform(1, 3): F = C delta^n with n = (1 + H)/H for Hurst exponent
-  0.5 <= H < inf; n = 3/2 is Hertz, n = 2 a soft oxide shell; n < 1 would be a
-  softening contact under compression, n > 3 is beyond any self-affine surface.
-- ``gamma`` ~ LogNormal(log 0.7, 0.5) J/m^2: clean steel-steel surface energy is of
-  order 1 J/m^2, contaminated surfaces (air, oxide) a few tenths; the paper uses 0.7.
-- ``delta0_ref_log`` (power law only, where the prefactor C is unidentifiable):
-  Normal(log 55 nm, 1): the Hertz overlap under the bead's weight is 50-55 nm; a
-  rough or coated contact sits within a factor of e of it.
+  lower decades sits at u < -10, a funnel: ESS 3 for an eta the data do not pin).
 - ``delta0_scatter`` ~ HalfNormal(0.3): protocol-to-protocol scatter of log delta0
   (remounting the bead changes the contact); 0.3 in log is a 30 % overlap change,
   i.e. 15 % in f0 (delta0 ~ f0^-2 at fixed load), more than the observed ~5 % f0 scatter.
@@ -28,11 +16,20 @@ latent site to Uniform(0, 1) through it), and all are proper (evidence needs tha
   a 1 % scatter is generous for a peak frequency.
 - ``offset_down`` ~ Normal(0, 0.005): softening resonances peak lower in a downward
   sweep (the jump is delayed); the per-direction offset absorbs that hysteresis.
+  ``offset_down`` and ``mu_f0`` are Normals sampled in (x - loc)/scale
+  (:class:`inference.coordinates.ScaledNormal`: same prior, O(1) sampler coordinates).
 - ``sigma_logq`` ~ HalfNormal(1): measured Q scatters by a factor of ~5 over protocols.
 - ``mu_logq`` ~ Normal(log 50, 1.5), ``tau_logq`` ~ HalfNormal(1): law-free nuisance model
   of Q for the laws that predict none (keeps every model's data identical).
-- baseline ``amp`` ~ HalfNormal(0.2), ``power`` ~ Uniform(0.5, 4): Delta f/f0 = -a x^b is
-  any monotone power curve from square-root to quartic.
+- baseline ``a_ref`` ~ LogNormal(log 0.02, 1.5), ``power`` ~ Uniform(0.5, 4): Delta f/f0 =
+  -a_ref (xs/xs_ref)^power is any monotone power curve from square-root to quartic. The
+  pivot xs_ref sits among the largest sweeps (inference.baseline.reference_scale), which
+  approach contact loss: first-order Hertz softens by 0.05 at x = 1, so a_ref is a few
+  per cent, known to a factor ~4.5 either way (95 % in [1e-3, 0.38]). Prior predictive
+  medians of |Delta f/f0| on hertz_dynamics (1.3e-4, 0.02, 0.032 at the smallest, pivot
+  and largest amplitude) are those of the former amp ~ HalfNormal(0.2) at xs = 1 (1.2e-4,
+  0.022, 0.036); on paper_like the former put 0.33 at the largest amplitude, 2.5 times the
+  largest shift measured, where this prior puts 0.035.
 - baseline ``mu_f0`` ~ Normal(2700, 300) Hz, ``tau_f0`` ~ HalfNormal(200) Hz: the bead
   resonance on steel is 2.6-2.9 kHz across laws.
 """
@@ -40,13 +37,18 @@ latent site to Uniform(0, 1) through it), and all are proper (evidence needs tha
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import jax.numpy as jnp
 import numpyro.distributions as dist
 from numpyro.distributions import constraints, transforms
 from numpyro.distributions.transforms import biject_to
 
-__all__ = ["PRIORS", "prior", "LogUniformLogit"]
+from models.law import Prior
+
+from .coordinates import ScaledNormal
+
+__all__ = ["PRIORS", "prior", "LogUniformLogit", "to_distribution", "law_prior"]
 
 
 class _LogInterval(constraints._Interval):
@@ -70,28 +72,49 @@ class LogUniformLogit(dist.LogUniform):
         self._support = _LogInterval(self.low, self.high)
 
 PRIORS: dict[str, dist.Distribution] = {
-    "young": dist.Uniform(150e9, 250e9),
-    "eta": LogUniformLogit(1e2, 1e8),
-    "eta_shift": LogUniformLogit(1e2, 1e8),
-    "eta_q": LogUniformLogit(1e2, 1e8),
-    "n": dist.Uniform(1.0, 3.0),
-    "gamma": dist.LogNormal(math.log(0.7), 0.5),
-    "delta0_ref_log": dist.Normal(math.log(55e-9), 1.0),
     "delta0_scatter": dist.HalfNormal(0.3),
     "sigma_shift": dist.HalfNormal(0.01),
-    "offset_down": dist.Normal(0.0, 0.005),
+    "offset_down": ScaledNormal(0.0, 0.005),
     "sigma_logq": dist.HalfNormal(1.0),
     "mu_logq": dist.Normal(math.log(50.0), 1.5),
     "tau_logq": dist.HalfNormal(1.0),
-    "amp": dist.HalfNormal(0.2),
+    "a_ref": dist.LogNormal(math.log(0.02), 1.5),
     "power": dist.Uniform(0.5, 4.0),
-    "mu_f0": dist.Normal(2700.0, 300.0),
+    "mu_f0": ScaledNormal(2700.0, 300.0),
     "tau_f0": dist.HalfNormal(200.0),
 }
 
 
+def to_distribution(spec: Any) -> dist.Distribution:
+    """A NumPyro distribution from a :class:`models.law.Prior` (distributions pass through)."""
+    if not isinstance(spec, Prior):
+        return spec
+    return {"uniform": lambda: dist.Uniform(spec.a, spec.b),
+            "loguniform": lambda: LogUniformLogit(spec.a, spec.b),
+            "lognormal": lambda: dist.LogNormal(math.log(spec.a), spec.b),
+            "normal": lambda: dist.Normal(spec.a, spec.b),
+            "halfnormal": lambda: dist.HalfNormal(spec.a)}[spec.kind]()
+
+
+def law_prior(param: Any, overrides: dict[str, dist.Distribution] | None = None
+              ) -> dist.Distribution:
+    """The prior of a law parameter (:class:`models.law.Param`); ``overrides`` wins."""
+    if overrides and param.name in overrides:
+        return overrides[param.name]
+    return to_distribution(param.prior)
+
+
 def prior(name: str, overrides: dict[str, dist.Distribution] | None = None) -> dist.Distribution:
-    """The prior of parameter ``name`` (``overrides`` wins), KeyError if unknown."""
+    """The prior of parameter ``name`` (``overrides`` wins): a nuisance parameter of
+    :data:`PRIORS`, else the first registered law parameter of that name; KeyError if
+    unknown."""
     if overrides and name in overrides:
         return overrides[name]
-    return PRIORS[name]
+    if name in PRIORS:
+        return PRIORS[name]
+    from models.registry import laws
+
+    for law in laws():
+        if name in law.param_names:
+            return to_distribution(law.param(name).prior)
+    raise KeyError(name)

@@ -1,4 +1,10 @@
-"""NUTS sampling in float64 with fixed seeds, ArviZ InferenceData, atomic netCDF I/O.
+"""NUTS sampling in float64 with fixed seeds, returned as ArviZ InferenceData.
+
+The InferenceData has named dimensions (``protocol`` with the dataset's protocol ids,
+``protocol_q``, ``sweep``; :mod:`inference.variables`), units and descriptions as
+variable attributes, and numpyro's full sample statistics (lp, step size, tree depth,
+acceptance rate, divergences, energy). Nothing here writes files: workflows.idata_io
+persists the result.
 
 Entry points call :func:`configure` before anything initialises JAX (host devices
 cannot be added afterwards; importing jaxns initialises the backend, so configure
@@ -8,22 +14,27 @@ devices as chains, else 'sequential' (still deterministic for a given seed).
 
 from __future__ import annotations
 
-import os
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import arviz as az
 import jax
+import numpy as np
 import numpyro
 from numpyro.infer import MCMC, NUTS, Predictive, init_to_median
 
 from .likelihood import without_observations
+from .variables import SAMPLE_STATS, SITE_DIMS, VARIABLES
 
-__all__ = ["configure", "FitResult", "run_nuts", "save_idata", "load_idata"]
+__all__ = ["configure", "FitResult", "run_nuts", "idata_coords", "describe", "EXTRA_FIELDS"]
+
+# everything arviz turns into sample_stats: lp (from potential_energy), step_size,
+# n_steps and tree_depth (from num_steps), acceptance_rate, diverging, energy
+EXTRA_FIELDS = ("diverging", "energy", "potential_energy", "num_steps", "accept_prob",
+                "adapt_state.step_size")
 
 
 def configure(n_devices: int = 4, *, x64: bool = True) -> None:
@@ -53,6 +64,56 @@ def _chain_method(num_chains: int, chain_method: str | None) -> str:
     return "parallel" if jax.local_device_count() >= num_chains else "sequential"
 
 
+def idata_coords(data: dict[str, Any],
+                 protocol_ids: Sequence[Any] | None = None) -> dict[str, np.ndarray]:
+    """Coordinates of the named dimensions for model inputs ``data``.
+
+    ``protocol``: ``protocol_ids`` (the dataset's ids, in the order of ``data['f0']``),
+    default 0..P-1; ``protocol_q``: the ids of the protocols with a reference Q
+    (``data['q_idx']``); ``sweep``: 0..S-1 over the included drive sweeps.
+    """
+    if data.get("f0") is not None:
+        n_p = int(np.shape(data["f0"])[0])
+    else:
+        n_p = int(data["n_protocols"])
+    ids = np.arange(n_p) if protocol_ids is None else np.asarray(list(protocol_ids))
+    if ids.shape != (n_p,):
+        raise ValueError(f"{ids.size} protocol ids for {n_p} protocols")
+    return {"protocol": ids, "protocol_q": ids[np.asarray(data["q_idx"], int)],
+            "sweep": np.arange(int(np.shape(data["amplitude"])[0]))}
+
+
+def _sweep_coords(data: dict[str, Any], protocols: np.ndarray) -> dict[str, Any]:
+    # non-index coordinates: each sweep names its protocol, direction and amplitude
+    proto = np.asarray(data["proto"], int)
+    direction = np.where(np.asarray(data["direction"]) > 0.5, "down", "up")
+    return {"sweep_protocol": ("sweep", protocols[proto]),
+            "sweep_direction": ("sweep", direction),
+            "drive_amplitude": ("sweep", np.asarray(data["amplitude"], float),
+                                {"units": "m", "description": "displacement amplitude "
+                                 "delta_a at resonance of the drive sweep"})}
+
+
+def describe(idata: az.InferenceData) -> az.InferenceData:
+    """Set ``units`` and ``description`` attributes on every variable that
+    :mod:`inference.variables` knows, in every group (in place; returns ``idata``)."""
+    for group in idata.groups():
+        ds = idata[group]
+        table = SAMPLE_STATS if group == "sample_stats" else VARIABLES
+        for name in ds.data_vars:
+            info = table.get(str(name))
+            if info is None:
+                continue
+            if group == "log_likelihood":
+                # a log density has no unit of its own: describe, do not give units
+                ds[name].attrs["description"] = f"pointwise log-likelihood of: {info.description}"
+            else:
+                ds[name].attrs["description"] = info.description
+                if info.units:
+                    ds[name].attrs["units"] = info.units
+    return idata
+
+
 def run_nuts(
     model: Callable,
     data: dict[str, Any],
@@ -71,6 +132,8 @@ def run_nuts(
     data_hash: str | None = None,
     extra_attrs: dict[str, Any] | None = None,
     measure_compile: bool = False,
+    coords: dict[str, Sequence[Any]] | None = None,
+    dims: dict[str, list[str]] | None = None,
 ) -> FitResult:
     """NUTS on ``model(data)``; returns InferenceData with posterior, sample_stats,
     log_likelihood, observed_data and (``predictive``) prior and posterior predictive.
@@ -82,6 +145,10 @@ def run_nuts(
     cost of a 1-warmup/1-sample run of the same kernel (compilation alone, measured on a
     second call; every run() recompiles with progress_bar=False, so nuts_s - compile_s
     is the sampling cost) and 'sampling_s'.
+
+    ``coords`` overrides the coordinates of :func:`idata_coords` (pass
+    ``{"protocol": dataset.protocol_ids}``; ``protocol_q`` then follows from it);
+    ``dims`` adds to or overrides :data:`inference.variables.SITE_DIMS`.
     """
     # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
     # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
@@ -107,12 +174,12 @@ def run_nuts(
             probe = MCMC(make_kernel(), num_warmup=1, num_samples=1, num_chains=num_chains,
                          chain_method=method, progress_bar=False)
             tc = time.perf_counter()
-            probe.run(k_run, data, extra_fields=("diverging", "energy"))
+            probe.run(k_run, data, extra_fields=EXTRA_FIELDS)
             jax.block_until_ready(probe.get_samples())
             costs.append(time.perf_counter() - tc)
         compile_s = min(costs)
     t0 = time.perf_counter()
-    mcmc.run(k_run, data, extra_fields=("diverging", "energy"))
+    mcmc.run(k_run, data, extra_fields=EXTRA_FIELDS)
     jax.block_until_ready(mcmc.get_samples())
     t2 = time.perf_counter()
     prior = post_pred = None
@@ -128,15 +195,27 @@ def run_nuts(
         prior_pred = {k: prior[k] for k in obs_names if k in prior}
         prior = {k: v for k, v in prior.items() if k not in obs_names}
     t3 = time.perf_counter()
-    kw: dict[str, Any] = {"log_likelihood": True}
+    user = dict(coords or {})
+    all_coords = idata_coords(data, user.get("protocol"))
+    all_coords.update({k: np.asarray(list(v)) for k, v in user.items()})
+    all_dims = {**SITE_DIMS, **(dims or {})}
+    kw: dict[str, Any] = {"log_likelihood": True, "coords": all_coords, "dims": all_dims}
     if predictive:
         kw.update(prior=prior, posterior_predictive=post_pred)
     idata = az.from_numpyro(mcmc, **kw)
     if predictive and prior_pred:
         # from_numpyro puts observed-site draws of `prior` into prior_predictive only
         # when given together; add them explicitly (shapes: 1 chain x draws).
-        pp = az.from_dict(prior_predictive={k: v[None] for k, v in prior_pred.items()})
+        pp = az.from_dict(prior_predictive={k: v[None] for k, v in prior_pred.items()},
+                          coords=all_coords, dims=all_dims)
         idata.extend(pp)
+    extra = _sweep_coords(data, all_coords["protocol"])
+    for group in idata.groups():
+        ds = idata[group]
+        if "sweep" in ds.dims:
+            for name, coord in extra.items():  # in place: the group keeps its identity
+                ds.coords[name] = coord
+    describe(idata)
     timings = {"nuts_s": t2 - t0, "predictive_s": t3 - t2}
     if measure_compile:  # absent otherwise (not NaN: NaN is not JSON)
         timings.update(compile_s=compile_s, sampling_s=t2 - t0 - compile_s)
@@ -151,19 +230,3 @@ def run_nuts(
     for k, v in attrs.items():
         idata.posterior.attrs[k] = v
     return FitResult(idata, mcmc, timings)
-
-
-def save_idata(idata: az.InferenceData, path: str | os.PathLike) -> Path:
-    """Write ``idata`` to netCDF atomically (temporary file in the folder, then rename)."""
-    from workflows._io import atomic_path
-
-    with atomic_path(path) as tmp:
-        idata.to_netcdf(str(tmp))
-    return Path(path)
-
-
-def load_idata(path: str | os.PathLike) -> az.InferenceData:
-    """Read an InferenceData written by :func:`save_idata` (fully loaded, file closed)."""
-    idata = az.from_netcdf(str(path))
-    idata.load()
-    return idata

@@ -6,8 +6,10 @@ from the model itself, fit by NUTS, and record the rank of the true value among 
 
 Uniformity test: the randomised PIT u = (rank + U(0, 1)) / (L + 1) is exactly
 Uniform(0, 1) under calibration; a Kolmogorov-Smirnov test of u gives a p-value per
-parameter (Säilynoja, Bürkner & Vehtari 2022 use the same ECDF; their simultaneous
-band is drawn in :func:`plot_ecdf` via the Dvoretzky-Kiefer-Wolfowitz bound).
+parameter (Säilynoja, Bürkner & Vehtari 2022 use the same ECDF). :func:`ecdf_difference`
+gives the ECDF - uniform curve per parameter and the simultaneous (1 - alpha) band of the
+Dvoretzky-Kiefer-Wolfowitz inequality, eps = sqrt(ln(2/alpha) / (2 N)) (Massart 1990),
+as arrays; workflows.sbc_outputs plots and writes them (inference writes no files).
 
 One MCMC object with ``jit_model_args=True`` serves every replicate (same shapes), so
 the sampler compiles once.
@@ -17,7 +19,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import jax
@@ -29,7 +30,8 @@ from scipy import stats
 from .likelihood import design_inputs, without_observations  # noqa: F401  (re-export)
 from .numpyro_models import ModelSpec, build_model
 
-__all__ = ["SBCResult", "run_sbc", "uniformity_pvalue", "plot_ecdf"]
+__all__ = ["SBCResult", "run_sbc", "uniformity_pvalue", "dkw_halfwidth",
+           "ecdf_difference"]
 
 
 @dataclass
@@ -110,32 +112,23 @@ def run_sbc(
     return SBCResult(ranks, num_samples, pvals, time.perf_counter() - t0, divs)
 
 
-def plot_ecdf(result: SBCResult, path: str | Path, alpha: float = 0.05) -> Path:
-    """ECDF difference plot of the PIT per parameter with a DKW (1 - alpha) band."""
-    import matplotlib
+def dkw_halfwidth(n: int, alpha: float = 0.05) -> float:
+    """Half-width eps of the DKW band: P(sup |ECDF_n - F| > eps) <= alpha for n draws,
+    eps = sqrt(ln(2/alpha) / (2 n)) (Massart 1990's tight constant)."""
+    if n < 1 or not 0.0 < alpha < 1.0:
+        raise ValueError(f"need n >= 1 and 0 < alpha < 1, got n={n}, alpha={alpha}")
+    return float(np.sqrt(np.log(2.0 / alpha) / (2.0 * n)))
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    from workflows._io import atomic_path
-
-    names = list(result.ranks)
-    fig, axes = plt.subplots(1, len(names), figsize=(3.2 * len(names), 3.0), squeeze=False)
-    grid = np.linspace(0, 1, 201)
-    for ax, k in zip(axes[0], names):
-        r = np.asarray(result.ranks[k], float)
-        u = np.sort((r + 0.5) / (result.n_draws + 1))
-        ecdf = np.searchsorted(u, grid, side="right") / len(u)
-        eps = np.sqrt(np.log(2 / alpha) / (2 * len(u)))
-        ax.fill_between(grid, -eps, eps, color="0.85", label=f"DKW {1 - alpha:.0%}")
-        ax.plot(grid, ecdf - grid, color="C0")
-        ax.axhline(0, color="k", lw=0.5)
-        ax.set_title(f"{k}  (KS p = {result.pvalues[k]:.2f})", fontsize=9)
-        ax.set_xlabel("fractional rank")
-    axes[0][0].set_ylabel("ECDF - uniform")
-    axes[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    return Path(path)
+def ecdf_difference(result: SBCResult, grid: np.ndarray | None = None,
+                    alpha: float = 0.05) -> tuple[np.ndarray, dict[str, np.ndarray], float]:
+    """(grid, {param: ECDF(u) - grid}, DKW half-width) of the fractional ranks
+    u = (rank + 1/2) / (L + 1) on ``grid`` in [0, 1] (default 201 points)."""
+    grid = np.linspace(0.0, 1.0, 201) if grid is None else np.asarray(grid, float)
+    out = {}
+    n = 0
+    for k, r in result.ranks.items():
+        u = np.sort((np.asarray(r, float) + 0.5) / (result.n_draws + 1))
+        n = len(u)
+        out[k] = np.searchsorted(u, grid, side="right") / n - grid
+    return grid, out, dkw_halfwidth(max(n, 1), alpha)

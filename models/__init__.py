@@ -1,51 +1,23 @@
 """beadrod physics: pure JAX, float64-ready contact mechanics of a bead on a rod.
 
-Nothing here touches global JAX configuration: entry points (the ``beadrod``
-CLI, ``tests/conftest.py``) switch float64 on. Modules are namespaces, one per
-contact law or rung, e.g. ``from models import hertz, shift, backbone``;
-:mod:`models.registry` is the one list of contact laws.
+Nothing here touches global JAX configuration: entry points (the ``beadrod`` CLI,
+``tests/conftest.py``) switch float64 on. Modules are namespaces, one per contact law or
+rung, e.g. ``from models import hertz, shift, backbone``; :mod:`models.registry` is the
+one list of contact laws and :mod:`models.rungs` of rungs. Submodules load on first use,
+so ``models.rungs`` can be read without starting JAX.
 """
 
-from . import (
-    adhesion,
-    backbone,
-    backbone_table,
-    dmt,
-    hbm,
-    hertz,
-    jkr,
-    ladder,
-    materials,
-    oscillator,
-    plan,
-    powerlaw,
-    registry,
-    rod,
-    scenes,
-    shift,
-    simulate,
-    timeint,
-    viscoelastic,
-)
+import importlib
 
 __all__ = [
-    "adhesion",
-    "backbone",
-    "backbone_table",
-    "dmt",
-    "hbm",
-    "hertz",
-    "jkr",
-    "ladder",
-    "materials",
-    "oscillator",
-    "plan",
-    "powerlaw",
-    "registry",
-    "rod",
-    "scenes",
-    "shift",
-    "simulate",
-    "timeint",
-    "viscoelastic",
+    "adhesion", "autotable", "backbone", "backbone_table", "dmt", "generic",
+    "greenwood_williamson", "hbm", "hertz", "jkr", "ladder", "law", "lawfile", "materials",
+    "maugis_dugdale", "oscillator", "plan", "powerlaw", "registry", "rod", "rungs", "scenes",
+    "shape_tables", "shift", "simulate", "surrogate", "timeint", "viscoelastic",
 ]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module 'models' has no attribute {name!r}")

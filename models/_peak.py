@@ -15,10 +15,10 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
-from ._sweep import _amps, _Dyn, _residual
-from .hbm import _bases, _newton
+from ._sweep import Dyn, hb_amplitudes, hb_residual
+from .hbm import fourier_bases, newton
 
-__all__: list[str] = []
+__all__ = ["min_overlap", "peaks_along"]
 
 # Past contact loss the sampled contact force has a jump at y = 0 (the in-contact dashpot of
 # JKR/DMT/linear losses, DMT's adhesion) or an unbounded slope there (Kuwabara-Kono's
@@ -33,16 +33,16 @@ _ZOOMS = 8          # refinements by (_GRID - 1)/2: Omega to ~1e-13 (1e-9 where 
 
 
 @partial(jax.jit, static_argnames=("h", "n", "bead"))
-def _peak_path(dyn: _Dyn, amps: jnp.ndarray, om0: ArrayLike, e0: ArrayLike, h: int, n: int,
+def _peak_path(dyn: Dyn, amps: jnp.ndarray, om0: ArrayLike, e0: ArrayLike, h: int, n: int,
                bead: bool = True) -> tuple[jnp.ndarray, ...]:
     """Resonance peak (max amplitude over Omega) at each amplitude in ``amps`` (ascending,
     continuation): unknowns (X, Omega, E); R = 0, dA/dOmega along the branch = 0, A = a."""
     def amp(x, om, e):
-        return _amps(x, om, e, dyn, h, n)[0 if bead else 1]
+        return hb_amplitudes(x, om, e, dyn, h, n)[0 if bead else 1]
 
     def fun(zz, a):
         x, om, e = zz[:-2], zz[-2], zz[-1]
-        res = lambda xx, oo: _residual(xx, oo, e, dyn, h, n)  # noqa: E731
+        res = lambda xx, oo: hb_residual(xx, oo, e, dyn, h, n)  # noqa: E731
         rx = jax.jacfwd(res)(x, om)
         ro = jax.jacfwd(res, argnums=1)(x, om)
         ga, go = jax.grad(amp, argnums=(0, 1))(x, om, e)
@@ -56,35 +56,35 @@ def _peak_path(dyn: _Dyn, amps: jnp.ndarray, om0: ArrayLike, e0: ArrayLike, h: i
     z0 = jnp.zeros(2 * h + 3).at[1].set(amps[0]).at[-2].set(om0).at[-1].set(e0 * amps[0])
 
     def step(zz, a):
-        zn, ok = _newton(lambda v: fun(v, a), zz, 60)
+        zn, ok = newton(lambda v: fun(v, a), zz, 60)
         return zn, (zn, ok)
 
     _, (zs, ok) = jax.lax.scan(step, z0, amps)
     return zs[:, -2], zs[:, -1], zs[:, :-2], ok
 
 
-def _min_overlap(x: np.ndarray, h: int, samples: int = 512) -> np.ndarray:
+def min_overlap(x: np.ndarray, h: int, samples: int = 512) -> np.ndarray:
     """Smallest overlap 1 + q over the cycle [-] of each row of X (..., 2H+1)."""
-    basis = np.asarray(_bases(h, samples)[0])  # (samples, 2H+1): q(theta) = basis @ X
+    basis = np.asarray(fourier_bases(h, samples)[0])  # (samples, 2H+1): q(theta) = basis @ X
     return 1.0 + (x @ basis.T).min(-1)
 
 
 @partial(jax.jit, static_argnames=("h", "n", "bead"))
-def _drive_for_amplitude(dyn: _Dyn, a: ArrayLike, omegas: jnp.ndarray, v0: jnp.ndarray,
+def _drive_for_amplitude(dyn: Dyn, a: ArrayLike, omegas: jnp.ndarray, v0: jnp.ndarray,
                          h: int, n: int, bead: bool = True) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(X, E) with R = 0 and first-harmonic amplitude ``a`` at each Omega, each solved from
     ``v0``; and the converged flags. Needs R only, never its Jacobian's accuracy."""
     def one(om):
         def fun(v):
             x, e = v[:-1], v[-1]
-            amp = _amps(x, om, e, dyn, h, n)[0 if bead else 1]
-            return jnp.concatenate([_residual(x, om, e, dyn, h, n), (amp - a)[None]])
-        return _newton(fun, v0, 60)
+            amp = hb_amplitudes(x, om, e, dyn, h, n)[0 if bead else 1]
+            return jnp.concatenate([hb_residual(x, om, e, dyn, h, n), (amp - a)[None]])
+        return newton(fun, v0, 60)
 
     return jax.vmap(one)(omegas)
 
 
-def _least_drive_peak(dyn: _Dyn, a: float, v0: np.ndarray, om_guess: float, half: float,
+def _least_drive_peak(dyn: Dyn, a: float, v0: np.ndarray, om_guess: float, half: float,
                       h: int, n: int, bead: bool) -> np.ndarray | None:
     """[X, Omega, E] of the resonance peak of amplitude ``a``, or None if not found.
 
@@ -118,14 +118,14 @@ def _least_drive_peak(dyn: _Dyn, a: float, v0: np.ndarray, om_guess: float, half
     return np.concatenate([v[j][:-1], [oms[j], v[j][-1]]])
 
 
-def _peaks_along(dyn: _Dyn, amps: np.ndarray, om0: float, e0: float, h: int, n: int,
-                 bead: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def peaks_along(dyn: Dyn, amps: np.ndarray, om0: float, e0: float, h: int, n: int,
+                bead: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Resonance peak (Omega, E, X, found) at each amplitude of ``amps`` (ascending):
     continuation of the stationarity equations while the orbit stays in contact, then
     the least drive from the first step that fails or comes near separation."""
     out = _peak_path(dyn, jnp.asarray(amps, float), om0, e0, h, n, bead)
     om, e, x, ok = (np.array(t) for t in out)
-    rough = ~ok | (_min_overlap(x, h) < _NEAR_LOSS)
+    rough = ~ok | (min_overlap(x, h) < _NEAR_LOSS)
     if not rough.any() or rough[0]:
         return om, e, x, ok
     for i in range(int(np.argmax(rough)), len(amps)):

@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field
 
 from .backbone import lindstedt_shift
 
-__all__ = ["Effect", "Plan"]
+__all__ = ["Effect", "Plan", "shift_estimate"]
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,10 @@ class Plan:
                       "effects": [asdict(e) for e in self.effects]})
 
 
-def _shift_estimate(x: float) -> float:
+def shift_estimate(x: float) -> float:
+    """Upper estimate of the Hertz |Delta f/f0| [-] at x = delta_a/delta0: the Lindstedt
+    term |S(x)| inflated by (1 + x^2), capped at 1 (shared by models.plan and
+    models._plan_rod)."""
     s = abs(float(lindstedt_shift(x, 1.5)))
     return min(1.0, s * (1.0 + x * x))
 

@@ -1,14 +1,14 @@
 """The rod's part of the plan: receptance, transmissibility, and what they do to the
 measured peak (the effects "rod", "rod_waveguide" and "rod_dispersion").
 
-:func:`_rod_numbers` describes the rod the simulator uses (a uniform clamped-free bar) at
-the scene's contact resonance; :func:`_effect_rod` turns those numbers into the three rod
+:func:`rod_numbers` describes the rod the simulator uses (a uniform clamped-free bar) at
+the scene's contact resonance; :func:`effect_rod` turns those numbers into the three rod
 effects and their error bounds on Delta f/f0. The derivations are in their docstrings, with
 the notation of :mod:`models.plan` (whose module docstring defines x, S(x), K0, omega0, ...).
 
 It is a module of its own because the rod's bounds are most of the planning code and need
-nothing from the other effects: :func:`models.plan._plan` calls :func:`_rod_numbers` and
-:func:`_effect_rod` and reads ``_ROD_Q``; the rest is private to this module.
+nothing from the other effects: :func:`models.plan._plan` calls :func:`rod_numbers` and
+:func:`effect_rod` and reads ``ROD_Q``; the rest is private to this module.
 """
 
 from __future__ import annotations
@@ -19,18 +19,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import rod
-from ._plan_base import Effect, _shift_estimate
+from ._plan_base import Effect, shift_estimate
 from .materials import wave_speeds
 from .scenes import Scene
 
-_ROD_Q = 200.0      # the rod modes' Q that models/simulate.py assumes (no scene gives one)
+__all__ = ["ROD_Q", "rod_numbers", "effect_rod"]
+
+ROD_Q = 200.0       # the rod modes' Q that models/simulate.py assumes (no scene gives one)
 _GAMMA1 = 4.0 / math.pi
 _J_MODES = 2000     # modal sums (dispersion): terms fall as j^-4 beyond the solver's domain
 
 
 def _slope(x: float) -> float:
-    """d ln|S|/d ln x of :func:`_shift_estimate`: 2 + 2x^2/(1 + x^2) (0 where capped)."""
-    return 0.0 if _shift_estimate(x) >= 1.0 else 2.0 + 2.0 * x * x / (1.0 + x * x)
+    """d ln|S|/d ln x of :func:`shift_estimate`: 2 + 2x^2/(1 + x^2) (0 where capped)."""
+    return 0.0 if shift_estimate(x) >= 1.0 else 2.0 + 2.0 * x * x / (1.0 + x * x)
 
 
 def _bar(mu: float, r: float, om: float) -> dict:
@@ -58,7 +60,7 @@ def _root(fun, lo: float, hi: float) -> float:
     return 0.5 * (lo + hi)
 
 
-def _rod_numbers(scene: Scene, lin: dict) -> dict:
+def rod_numbers(scene: Scene, lin: dict) -> dict:
     """The rod the simulator uses (models/simulate.py): a uniform clamped-free bar, modes
     f_j = (2j - 1) f_rod, tip modal mass M = m_rod/2 (a compliant transducer end only raises
     M), base participation Gamma_j = 4(-1)^(j+1)/((2j - 1) pi). Its tip receptance is
@@ -129,7 +131,7 @@ def _rayleigh_over_vt(nu: float) -> float:
 
 def _dispersion_sums(scene: Scene, rn: dict) -> dict:
     """Changes of g, h and psi'' at omega0 when every mode moves onto the first
-    Pochhammer-Chree branch (f_j -> f_j (1 - e_j)). See :func:`_effect_rod`."""
+    Pochhammer-Chree branch (f_j -> f_j (1 - e_j)). See :func:`effect_rod`."""
     mat = scene.rod_material
     vt = float(_wave_speeds(mat)[1])
     f_top = 0.95 * rod.OMEGA_MAX * vt / (2 * math.pi * scene.rod_radius)  # as the simulator
@@ -168,9 +170,9 @@ def _dispersion_sums(scene: Scene, rn: dict) -> dict:
             "psi": [(psi(rho2, n), psi(rho2d, n)) for n in (1, _J_MODES)]}
 
 
-def _effect_rod(scene: Scene, lin: dict, rn: dict, x_b: float, x_c: float, q_lo: float,
-                tol: float) -> list[Effect]:
-    """Rod dynamics, higher rod modes, and dispersion (rod model: :func:`_rod_numbers`).
+def effect_rod(scene: Scene, lin: dict, rn: dict, x_b: float, x_c: float, q_lo: float,
+               tol: float) -> list[Effect]:
+    """Rod dynamics, higher rod modes, and dispersion (rod model: :func:`rod_numbers`).
 
     Below the first mode (r = f0/f_rod < 1). The rod end is a spring of compliance
     c_b(omega) in series with the contact; with g = K0 c_b the linear resonance solves
@@ -211,8 +213,8 @@ def _effect_rod(scene: Scene, lin: dict, rn: dict, x_b: float, x_c: float, q_lo:
     Q_rod^2/2 >= 4 Q^2. The same worst case bounds the higher modes and dispersion (they
     only move the resonances).
     """
-    s_b, p_b = _shift_estimate(x_b), _slope(x_b)
-    s_c, p_c = _shift_estimate(x_c), _slope(x_c)
+    s_b, p_b = shift_estimate(x_b), _slope(x_b)
+    s_c, p_c = shift_estimate(x_c), _slope(x_c)
     kappa = 4.0 * q_lo * q_lo
     mu, r = rn["mu"], rn["r"]
     area = math.pi * scene.rod_radius**2
@@ -251,13 +253,13 @@ def _effect_rod(scene: Scene, lin: dict, rn: dict, x_b: float, x_c: float, q_lo:
     else:
         kc = scene.mass * 2 * math.pi * lin["f0"] / (scene.rod_material.density * rn["c0"]
                                                      * area)
-        psi_w = 0.5 * _ROD_Q**2
-        b_rod = s_b * (p_b + 1.0) * kc + s_b * _pull(psi_w, _ROD_Q, kappa)
+        psi_w = 0.5 * ROD_Q**2
+        b_rod = s_b * (p_b + 1.0) * kc + s_b * _pull(psi_w, ROD_Q, kappa)
         b_hi = b_d = b_rod
         dg_w = math.inf
         regime = (f"above the rod's first mode: rod resonances every {2 * rn['f_rod']:.3g} Hz "
                   f"against the bead's bandwidth f0/Q = {lin['f0'] / q_lo:.3g} Hz; ln|T| "
-                  f"curvature up to Q_rod^2/2 = {psi_w:.3g} (Q_rod = {_ROD_Q:g} assumed) "
+                  f"curvature up to Q_rod^2/2 = {psi_w:.3g} (Q_rod = {ROD_Q:g} assumed) "
                   f"against 4 Q^2 = {kappa:.3g}; loading K0 c_b ~ {kc:.3g}")
         det.update(k0_cb=kc, log_T_curvature=psi_w)
         disp_det = {}

@@ -18,12 +18,13 @@ from jax.typing import ArrayLike
 
 from . import dmt, hertz, jkr, rod, viscoelastic
 from ._math import safe_pow
-from .hbm import _newton
+from .hbm import newton
 from .oscillator import ContactLaw, CustomLaw
 from .plan import Plan
 from .scenes import Scene
 
-__all__ = ["rod_modes", "HBM_WAVEGUIDE_MODES"]
+__all__ = ["rod_modes", "HBM_WAVEGUIDE_MODES", "Dyn", "linear_contact", "build_dynamics",
+           "hb_residual", "hb_amplitudes", "hbm_sweep", "ti_sweep"]
 
 HBM_WAVEGUIDE_MODES = 256
 
@@ -45,7 +46,7 @@ def _dmt_g(y: jnp.ndarray, yd: jnp.ndarray, p: dict) -> jnp.ndarray:
     return el + jnp.where(y > 0, 2.0 * p["zl"] * p["s"] * yd, 0.0)
 
 
-class _Dyn(eqx.Module):
+class Dyn(eqx.Module):
     """Contact law + rod modes (nondimensional), the pytree the jitted solvers take."""
 
     law: ContactLaw
@@ -85,7 +86,7 @@ def rod_modes(f_rod: float, n: int, *, dispersion_scene: Scene | None = None,
     return f
 
 
-def _lin(scene: Scene, law: str) -> tuple[float, float]:
+def linear_contact(scene: Scene, law: str) -> tuple[float, float]:
     """Static overlap delta0 [m] and linear stiffness K0 [N/m] of ``law`` under the load."""
     mod = hertz if law == "Hertz" else (dmt if law == "DMT" else jkr)
     kw = {"e_star": scene.e_star, "radius": scene.radius}
@@ -95,9 +96,9 @@ def _lin(scene: Scene, law: str) -> tuple[float, float]:
                                                                                    **kw))
 
 
-def _dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: float,
-              omega0: float, s: float, method: str, rod_q: float, ti_modes: int,
-              notes: list[str]) -> tuple[_Dyn, np.ndarray]:
+def build_dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: float,
+                   omega0: float, s: float, method: str, rod_q: float, ti_modes: int,
+                   notes: list[str]) -> tuple[Dyn, np.ndarray]:
     """The nondimensional law, losses and rod modes of ``scene`` with the ``built`` effects
     (see models/simulate.py); rod mode frequencies [Hz]. Appends to ``notes``."""
     q_meas = scene.quality_factor if scene.quality_factor is not None else math.inf
@@ -131,25 +132,25 @@ def _dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: float
         f_rod = scene.rod_first_resonance if measured else float(rod.first_resonance_fixed_free(
             scene.rod_length, young=scene.rod_material.young,
             density=scene.rod_material.density))
-        n_modes = (HBM_WAVEGUIDE_MODES if method == "harmonic-balance" else ti_modes) \
+        n_modes = (HBM_WAVEGUIDE_MODES if method == "harmonic_balance" else ti_modes) \
             if "rod_waveguide" in built else 1
         fr = rod_modes(f_rod, n_modes, measured=measured,
                        dispersion_scene=scene if "rod_dispersion" in built else None)
         j = np.arange(1, n_modes + 1)
         gam = 4.0 * (-1.0) ** (j + 1) / ((2 * j - 1) * np.pi)
         mu = scene.mass / (0.5 * scene.rod_mass)
-        if method == "time-integration" and "rod_waveguide" in built:
+        if method == "time_integration" and "rod_waveguide" in built:
             notes.append(f"time integration keeps {n_modes} rod modes (waveguide truncated)")
     else:
         fr, gam, mu = np.zeros(0), np.zeros(0), 0.0
     rho = 2 * np.pi * fr / omega0
-    return _Dyn(contact, jnp.asarray(mu), jnp.asarray(rho), jnp.asarray(gam),
-                jnp.asarray(0.5 / rod_q)), fr
+    return Dyn(contact, jnp.asarray(mu), jnp.asarray(rho), jnp.asarray(gam),
+               jnp.asarray(0.5 / rod_q)), fr
 
 
 # --- harmonic balance ----------------------------------------------------------------------
 
-def _harm(x: jnp.ndarray, omega: ArrayLike, dyn: _Dyn, h: int,
+def _harm(x: jnp.ndarray, omega: ArrayLike, dyn: Dyn, h: int,
           n: int) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(Q_k, F_k) complex for k = 0..H (Z = a - i b) from X = [c0, a1, b1, ...]."""
     z = jnp.concatenate([x[:1].astype(complex), x[1::2] - 1j * x[2::2]])
@@ -162,8 +163,11 @@ def _harm(x: jnp.ndarray, omega: ArrayLike, dyn: _Dyn, h: int,
     return z, c * jnp.where(k == 0, 1.0, 2.0)
 
 
-def _residual(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: _Dyn, h: int,
-              n: int) -> jnp.ndarray:
+def hb_residual(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: Dyn, h: int,
+                n: int) -> jnp.ndarray:
+    """Harmonic-balance residual [-] (2H+1,) of the bead on the rod with the rod modes
+    eliminated (models/simulate.py): the mean force balance, then per harmonic k
+    -(k Omega)^2 Q_k + (1 - (k Omega)^2 mu C) F_k - (1 + (k Omega)^2 G) D_k (real, -imag)."""
     z, fk = _harm(x, omega, dyn, h, n)
     w = omega * jnp.arange(1, h + 1)
     c, g = dyn.rod_terms(w)
@@ -172,8 +176,8 @@ def _residual(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: _Dyn, h: 
     return jnp.concatenate([fk[:1].real, jnp.stack([r.real, -r.imag], -1).reshape(-1)])
 
 
-def _amps(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: _Dyn, h: int,
-          n: int) -> tuple[jnp.ndarray, jnp.ndarray]:
+def hb_amplitudes(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: Dyn, h: int,
+                  n: int) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(bead |B|, overlap |Q_1|) first-harmonic amplitudes [-]."""
     z, fk = _harm(x, omega, dyn, h, n)
     c, g = dyn.rod_terms(jnp.atleast_1d(omega))
@@ -182,17 +186,17 @@ def _amps(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, dyn: _Dyn, h: int,
 
 
 @partial(jax.jit, static_argnames=("h", "n"))
-def _hbm_sweep(dyn: _Dyn, drive: ArrayLike, omegas: jnp.ndarray, x0: jnp.ndarray, h: int,
-               n: int) -> tuple[jnp.ndarray, ...]:
+def hbm_sweep(dyn: Dyn, drive: ArrayLike, omegas: jnp.ndarray, x0: jnp.ndarray, h: int,
+              n: int) -> tuple[jnp.ndarray, ...]:
     """Stepped sweep (natural continuation; at a fold the solve falls to the other branch,
     as the analyser's sweep does). Returns X (F, 2H+1), ok, bead and overlap amplitudes."""
     def step(x, om):
-        fun = lambda z: _residual(z, om, drive, dyn, h, n)  # noqa: E731
-        xn, ok = _newton(fun, x, 40)
+        fun = lambda z: hb_residual(z, om, drive, dyn, h, n)  # noqa: E731
+        xn, ok = newton(fun, x, 40)
         for guess in (x, jnp.zeros_like(x), 2.0 * x):
             xn, ok = jax.lax.cond(ok, lambda xn=xn, ok=ok: (xn, ok),
-                                  lambda g=guess: _newton(fun, g, 200))
-        ab, aq = _amps(xn, om, drive, dyn, h, n)
+                                  lambda g=guess: newton(fun, g, 200))
+        ab, aq = hb_amplitudes(xn, om, drive, dyn, h, n)
         return xn, (xn, ok, ab, aq)
 
     _, out = jax.lax.scan(step, x0, omegas)
@@ -202,8 +206,8 @@ def _hbm_sweep(dyn: _Dyn, drive: ArrayLike, omegas: jnp.ndarray, x0: jnp.ndarray
 # --- time integration ----------------------------------------------------------------------
 
 @partial(jax.jit, static_argnames=("steps", "settle", "measure"))
-def _ti_sweep(dyn: _Dyn, drive: ArrayLike, omegas: jnp.ndarray, y0: jnp.ndarray, steps: int,
-              settle: int, measure: int) -> tuple[jnp.ndarray, ...]:
+def ti_sweep(dyn: Dyn, drive: ArrayLike, omegas: jnp.ndarray, y0: jnp.ndarray, steps: int,
+             settle: int, measure: int) -> tuple[jnp.ndarray, ...]:
     """Stepped swept sine, RK4 on (q, v_1..v_N, q', v_1'..v_N'); lock-in of q and the bead."""
     nm = dyn.rho.shape[0]
 

@@ -47,6 +47,9 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from ._math import safe_pow, safe_sqrt
+from .quadrature import bisect as _bisect
+from .quadrature import gauss_legendre as _gl
+from .quadrature import polish as _polish
 
 __all__ = [
     "powerlaw_potential",
@@ -62,11 +65,6 @@ _N_NODES = 48
 _N_PANELS = 24       # flight arc: graded panels reach (pi/4) 0.25^22 ~ 4e-14 of pi/2
 _PANEL_RATIO = 0.25
 _PANEL_NODES = 24    # Gauss nodes per panel: interpolant 3^-24 ~ 4e-12 (see _graded)
-
-
-def _gl(n: int, a: float = 0.0, b: float = 1.0):
-    t, w = np.polynomial.legendre.leggauss(n)
-    return jnp.asarray(a + (b - a) * (t + 1) / 2), jnp.asarray(w * (b - a) / 2)
 
 
 def powerlaw_potential(q: ArrayLike, n: ArrayLike) -> jnp.ndarray:
@@ -97,28 +95,6 @@ def powerlaw_divided(a: ArrayLike, b: ArrayLike, n: ArrayLike) -> jnp.ndarray:
     coarse = (powerlaw_potential(jnp.where(ok, 0.0, b), n)
               - powerlaw_potential(jnp.where(ok, -1.0, a), n)) / jnp.where(ds > 0, ds, 1.0)
     return jnp.where(ok, fine, jnp.sign(b - a) * coarse)
-
-
-def _bisect(fn, lo, hi, iters=64):
-    """Root of a monotone-bracketed scalar fn on [lo, hi] (sign change), no gradient."""
-    flo = fn(lo)
-
-    def body(_, c):
-        lo, hi, flo = c
-        mid = 0.5 * (lo + hi)
-        fm = fn(mid)
-        same = jnp.sign(fm) == jnp.sign(flo)
-        return jnp.where(same, mid, lo), jnp.where(same, hi, mid), jnp.where(same, fm, flo)
-
-    lo, hi, _ = jax.lax.fori_loop(0, iters, body, (lo, hi, flo))
-    return 0.5 * (lo + hi)
-
-
-def _polish(fn, root):
-    """One Newton step from a converged bisection root: restores implicit-function gradients."""
-    root = jax.lax.stop_gradient(root)
-    val, slope = jax.jvp(fn, (root,), (jnp.ones_like(root),))
-    return root - val / slope
 
 
 def _contact_arc(divided, qmax, qmin, nodes):

@@ -58,7 +58,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
-from ._math import knot_cell
+from . import surrogate
 from ._tables import rebuild_cli
 
 __all__ = [
@@ -67,10 +67,12 @@ __all__ = [
     "N_MAX",
     "TABLE_PATH",
     "backbone_shift_fast",
+    "backbone_shift_clipped",
     "contact_loss_amplitude",
     "load_table",
     "build_table",
     "exact_shift",
+    "SPEC",
 ]
 
 X_MAX = 2.0
@@ -84,52 +86,6 @@ _NEAR_KINK = 0.05   # flight-side samples this close to x_c use the fine quadrat
 _FINE_NODES = 128
 
 _TABLE: dict[str, np.ndarray] | None = None
-
-
-# ----------------------------------------------------------------------------- grid
-def _n_nodes(m: int = _M_CHEB) -> tuple[np.ndarray, np.ndarray]:
-    """Chebyshev-Gauss nodes nu_j in (-1, 1) and n_j = 2 + nu_j (no node at n = 1)."""
-    nu = np.cos(np.pi * (np.arange(m) + 0.5) / m)
-    return nu, 2.0 + nu * (N_MAX - N_MIN) / 2.0
-
-
-def _knots(k: int = _N_KNOTS) -> tuple[np.ndarray, np.ndarray]:
-    """Graded knots: u dense towards 1 (contact side), v dense towards 0 (flight side)."""
-    s = np.linspace(0.0, 1.0, k)
-    return 1.0 - (1.0 - s) ** 2, s**2
-
-
-def _to_chebyshev(values: np.ndarray) -> np.ndarray:
-    """Values on the Chebyshev-Gauss nodes (last axis) -> Chebyshev coefficients."""
-    m = values.shape[-1]
-    nu, _ = _n_nodes(m)
-    t = np.cos(np.outer(np.arange(m), np.arccos(nu)))  # T_k(nu_j)
-    coef = values @ t.T * (2.0 / m)
-    coef[..., 0] /= 2.0
-    return coef
-
-
-def _spline_coefficients(knots: np.ndarray, data: np.ndarray,
-                         start_slope: np.ndarray | None = None) -> np.ndarray:
-    """Cubic spline of data (knots, m) -> local power coefficients (4, k-1, m).
-
-    Not-a-knot ends, or a clamped first derivative ``start_slope`` (m,) at the first knot.
-    """
-    from scipy.interpolate import CubicSpline
-
-    bc = "not-a-knot" if start_slope is None else ((1, start_slope), "not-a-knot")
-    return CubicSpline(knots, data, axis=0, bc_type=bc).c
-
-
-def _kink_slope(coef_q: np.ndarray, uk: np.ndarray, n: np.ndarray, xc: np.ndarray,
-                qc: np.ndarray) -> np.ndarray:
-    """dS/dv at v = 0+ equal to the contact spline's dS/dx at x_c- (C1 across x_c).
-
-    S = (n-1) x^2 Q(x/x_c): dS/dx = (n-1) x_c (2 Q(1) + Q'(1)); dv/dx = 1/(X_MAX - x_c).
-    """
-    h = uk[-1] - uk[-2]
-    dq = (3 * coef_q[0, -1] * h + 2 * coef_q[1, -1]) * h + coef_q[2, -1]
-    return (n - 1.0) * xc * (2.0 * qc + dq) * (X_MAX - xc)
 
 
 # --------------------------------------------------------------------------- build
@@ -155,45 +111,22 @@ def exact_shift(x: np.ndarray, n: np.ndarray, xc: np.ndarray) -> np.ndarray:
     return out
 
 
-def sample_contact(u: np.ndarray, n: np.ndarray, xc: np.ndarray) -> np.ndarray:
-    """Q = S/((n-1) x^2) at x = u x_c(n), 0 < u < 1, from the exact backbone."""
-    x = u * xc
-    return exact_shift(x, n, xc) / ((n - 1.0) * x**2)
+def _lindstedt_q0(n: np.ndarray) -> np.ndarray:
+    from .backbone import lindstedt_shift
+
+    return np.asarray(lindstedt_shift(1.0, n))
 
 
-def sample_flight(v: np.ndarray, n: np.ndarray, xc: np.ndarray) -> np.ndarray:
-    """S at x = x_c + v (X_MAX - x_c), 0 < v <= 1, from the exact backbone."""
-    return exact_shift(xc + v * (X_MAX - xc), n, xc)
+SPEC = surrogate.BackboneSpec(
+    p_lo=N_MIN, p_hi=N_MAX, exact=lambda x, n, xc: exact_shift(x, n, xc), kink=_kink,
+    lindstedt=_lindstedt_q0, prefactor=lambda n: n - 1.0, x_max=X_MAX, m_cheb=_M_CHEB,
+    n_knots=_N_KNOTS)
+"""The power law's surrogate: p = n in [1, 3], S = (n - 1) x^2 Q below x_c."""
 
 
 def build_table() -> dict[str, np.ndarray]:
     """Evaluate the exact backbone on the grid and fit the splines (deterministic)."""
-    from .backbone import lindstedt_shift
-
-    _, n = _n_nodes()
-    uk, vk = _knots()
-    xc, sc = _kink(n)
-    qa = np.empty((uk.size, n.size))
-    qa[0] = np.asarray(lindstedt_shift(1.0, n)) / (n - 1.0)
-    qa[-1] = sc / ((n - 1.0) * xc**2)
-    uu, nn = np.meshgrid(uk[1:-1], n, indexing="ij")
-    qa[1:-1] = sample_contact(uu.ravel(), nn.ravel(),
-                              np.broadcast_to(xc, nn.shape).ravel()).reshape(uu.shape)
-    sb = np.empty((vk.size, n.size))
-    sb[0] = sc
-    vv, nn = np.meshgrid(vk[1:], n, indexing="ij")
-    sb[1:] = sample_flight(vv.ravel(), nn.ravel(),
-                           np.broadcast_to(xc, nn.shape).ravel()).reshape(vv.shape)
-    coef_q = _spline_coefficients(uk, qa)
-    slope = _kink_slope(coef_q, uk, n, xc, qa[-1])
-    return {
-        "n_nodes": n, "u_knots": uk, "v_knots": vk, "xc_nodes": xc,
-        "q_contact": qa, "s_flight": sb, "kink_slope": slope,
-        "xc_cheb": _to_chebyshev(xc),
-        "coef_contact": _to_chebyshev(coef_q),
-        "coef_flight": _to_chebyshev(_spline_coefficients(vk, sb, slope)),
-        "x_max": np.asarray(X_MAX),
-    }
+    return surrogate.build(SPEC)
 
 
 def load_table() -> dict[str, np.ndarray]:
@@ -202,32 +135,8 @@ def load_table() -> dict[str, np.ndarray]:
     if _TABLE is None:
         with np.load(TABLE_PATH) as f:
             _TABLE = {k: f[k] for k in f.files}
+        _TABLE.setdefault("p_range", np.asarray([N_MIN, N_MAX]))  # tables built before it
     return _TABLE
-
-
-# ------------------------------------------------------------------------ evaluate
-def _cheb_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
-    """T_0..T_{m-1}(nu) by the three-term recurrence (smooth at nu = +-1, unlike arccos)."""
-    t = [jnp.ones_like(nu), nu]
-    for _ in range(m - 2):
-        t.append(2.0 * nu * t[-1] - t[-2])
-    return jnp.stack(t[:m], axis=-1)
-
-
-def _spline_eval(knots: np.ndarray, coef: np.ndarray, z: jnp.ndarray,
-                 basis: jnp.ndarray, frac: jnp.ndarray) -> jnp.ndarray:
-    """Tensor-product spline(z) x Chebyshev(n); z outside the knots extends the end piece.
-
-    ``basis`` is (m,) when n is one scalar (the sampler's case: one n, many x): the
-    Chebyshev sum is then taken once per knot, before the per-point gather, which is
-    ~100x cheaper under vmap than gathering (4, points, m) blocks per particle.
-    """
-    i, d = knot_cell(knots, z, frac)
-    if basis.ndim == 1:
-        c = (jnp.asarray(coef) @ basis)[:, i]
-    else:
-        c = jnp.einsum("k...m,...m->k...", jnp.asarray(coef)[:, i, :], basis)
-    return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
 
 
 @jax.jit
@@ -236,10 +145,7 @@ def contact_loss_amplitude(n: ArrayLike) -> jnp.ndarray:
 
     Chebyshev interpolant of a1(qmax_c) with qmax_c = (n+1)^(1/n) - 1, n in [1, 3].
     """
-    tab = load_table()
-    n = jnp.asarray(n, dtype=float)
-    basis = _cheb_basis(n - 2.0, tab["xc_cheb"].size)
-    return basis @ jnp.asarray(tab["xc_cheb"])
+    return surrogate.kink_amplitude(load_table(), jnp.asarray(n, dtype=float), N_MIN, N_MAX)
 
 
 @jax.jit
@@ -259,22 +165,19 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
     if n.ndim > 0:  # a scalar n stays scalar: see _spline_eval
         x, n = jnp.broadcast_arrays(x, n)
     inside = ((x >= 0.0) & (x <= X_MAX) & (n >= N_MIN - _N_TOL) & (n <= N_MAX + _N_TOL))
-    # clamp into the domain so both branches and their gradients stay finite (double where)
-    xs = jnp.clip(x, 0.0, X_MAX)
-    ns = jnp.clip(n, N_MIN, N_MAX)
-    basis = _cheb_basis(ns - 2.0, tab["n_nodes"].size)
-    xc = basis @ jnp.asarray(tab["xc_cheb"])
-    # fractional knot indices from the grading of _knots (u = 1 - (1-s)^2, v = s^2)
-    last = tab["u_knots"].size - 1
-    u = xs / xc
-    v = (xs - xc) / (X_MAX - xc)
-    fu = last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0)))
-    fv = last * jnp.sqrt(jnp.clip(v, 0.0, 1.0))
-    q = _spline_eval(tab["u_knots"], tab["coef_contact"], u, basis, fu)
-    contact = (ns - 1.0) * xs**2 * q
-    flight = _spline_eval(tab["v_knots"], tab["coef_flight"], v, basis, fv)
-    s = jnp.where(xs <= xc, contact, flight)
+    s = surrogate.evaluate(tab, x, n, prefactor=lambda ns: ns - 1.0)
     return jnp.where(inside, s, jnp.nan)
+
+
+def backbone_shift_clipped(x: ArrayLike, n: ArrayLike) -> jnp.ndarray:
+    """:func:`backbone_shift_fast` with x clipped to [0, X_MAX] and n to [N_MIN, N_MAX].
+
+    What the samplers use: past x = 2 (delta_a > 2 delta0, only for absurd parameters) the
+    curve is held at its x = 2 value and the misfit is left to the likelihood, so no NaN
+    reaches NUTS; n outside [1, 3] is refused by the priors, the clip only guards rounding.
+    """
+    return backbone_shift_fast(jnp.clip(jnp.asarray(x, float), 0.0, X_MAX),
+                               jnp.clip(jnp.asarray(n, float), N_MIN, N_MAX))
 
 
 def _main(argv: list[str] | None = None) -> int:

@@ -167,3 +167,37 @@ def overlap_from_frequency(
     del e_star
     fc = pull_off_force(gamma=gamma, radius=radius)
     return 1.5 * (load + fc) / (mass * jnp.square(2.0 * jnp.pi * f0))
+
+
+def _law():
+    from .backbone_table import X_MAX
+    from .law import GAMMA, YOUNG, ContactLaw
+    from .shape_tables import backbone_fast
+    from .shift import first_order_hertz
+
+    def ratio(kw):
+        return kw["load"] / pull_off_force(gamma=kw["gamma"], radius=kw["radius"])
+
+    return ContactLaw(
+        name="dmt", label="DMT adhesion", color="#CC79A7",
+        reference="Derjaguin, Muller & Toporov 1975; Maugis 2000 Sec. 4",
+        description=("adhesive elastic sphere (small Tabor parameter): Hertz stiffness "
+                     "under the load plus the pull-off force 4 pi gamma R"),
+        params=(YOUNG, GAMMA),
+        force=lambda delta, *, e_star, radius, gamma, **_: force(
+            delta, e_star=e_star, radius=radius, gamma=gamma),
+        static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
+            load, e_star=e_star, radius=radius, gamma=gamma),
+        # the elastic scale E* R^(1/2) scatters, not the adhesion (as for JKR)
+        overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
+            overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
+        # first order: the DMT stiffness is Hertz's, so in x = delta_a/delta0 (the DMT
+        # overlap) the average is exactly the Hertz one
+        shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
+                "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw))},
+    )
+
+
+LAW = _law()
+"""The DMT contact law (:class:`models.law.ContactLaw`)."""
+__all__ += ["LAW"]

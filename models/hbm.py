@@ -40,6 +40,8 @@ from .oscillator import ContactLaw
 
 __all__ = [
     "default_time_samples",
+    "fourier_bases",
+    "newton",
     "residual",
     "amplitude",
     "solve",
@@ -59,7 +61,9 @@ def default_time_samples(harmonics: int) -> int:
     return int(2 ** np.ceil(np.log2(max(64, 16 * harmonics))))
 
 
-def _bases(h: int, n: int):
+def fourier_bases(h: int, n: int) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
+    """AFT bases on n time samples theta_j = 2 pi j/n for X = [c0, a1, b1, ..., aH, bH]:
+    B (n, 2H+1) with q(theta) = B @ X, dB/dtheta, and the harmonic index of each column."""
     th = 2.0 * np.pi * np.arange(n) / n
     k = np.arange(1, h + 1)
     b = np.ones((n, 2 * h + 1))
@@ -82,7 +86,7 @@ def residual(x: jnp.ndarray, omega: ArrayLike, drive: ArrayLike, law: ContactLaw
     """Galerkin residual R(X, Omega, E) [-] of length 2H + 1."""
     h = harmonics
     n = n_time or default_time_samples(h)
-    b, db, kk = _bases(h, n)
+    b, db, kk = fourier_bases(h, n)
     q, qd = b @ x, db @ x
     fnl = (law.force(1.0 + q, omega * qd) - 1.0) / law.slope
     r = -(omega * kk) ** 2 * x + _project(fnl, h)
@@ -94,7 +98,7 @@ def amplitude(x: jnp.ndarray) -> jnp.ndarray:
     return jnp.sqrt(x[..., 1] ** 2 + x[..., 2] ** 2)
 
 
-def _newton(fun, x0, iters: int, tol: float = 1e-11):
+def newton(fun, x0, iters: int, tol: float = 1e-11):
     """Newton on fun(x) = 0, each step capped at 0.5 in max-norm; returns (x, converged).
 
     No line search on |fun|: where a branch has just ended (a fold) |fun| has a local
@@ -120,7 +124,7 @@ def _newton(fun, x0, iters: int, tol: float = 1e-11):
 def _implicit(fun, x0, iters):
     """Root of fun with implicit-function-theorem derivatives (custom_root)."""
     def solver(f, guess):
-        return _newton(f, guess, iters)[0]
+        return newton(f, guess, iters)[0]
 
     def tangent_solve(g, y):
         return jnp.linalg.solve(jax.jacfwd(g)(y), y)
@@ -147,12 +151,12 @@ def sweep(law: ContactLaw, drive: ArrayLike, omegas: ArrayLike, *, harmonics: in
     """
     def step(x, om):
         fun = lambda z: residual(z, om, drive, law, harmonics, n_time)
-        xn, ok = _newton(fun, x, iters)
+        xn, ok = newton(fun, x, iters)
         # the branch ended (fold): land on the other one, as the analyser's sweep does,
         # by restarting from rest (jump down) or from a larger orbit (jump up)
         for guess in (x, jnp.zeros_like(x), 2.0 * x):
             xn, ok = jax.lax.cond(ok, lambda xn=xn, ok=ok: (xn, ok),
-                                  lambda g=guess: _newton(fun, g, 5 * iters))
+                                  lambda g=guess: newton(fun, g, 5 * iters))
         return xn, (xn, ok)
 
     _, (xs, ok) = jax.lax.scan(step, jnp.zeros(2 * harmonics + 1), jnp.asarray(omegas))
@@ -200,8 +204,8 @@ def frf(law: ContactLaw, drive: ArrayLike, omega_lo: float = 0.8, omega_hi: floa
     h = harmonics
     dim = 2 * h + 2
     res = lambda z: residual(z[:-1], z[-1], drive, law, h, n_time)
-    x0, _ = _newton(lambda x: residual(x, omega_lo, drive, law, h, n_time),
-                    jnp.zeros(2 * h + 1), 40)
+    x0, _ = newton(lambda x: residual(x, omega_lo, drive, law, h, n_time),
+                   jnp.zeros(2 * h + 1), 40)
     z0 = jnp.concatenate([x0, jnp.array([omega_lo], dtype=x0.dtype)])
     t0 = _tangent(jax.jacfwd(res)(z0), jnp.zeros(dim).at[-1].set(1.0))
     if ds_max is None:
@@ -259,7 +263,7 @@ def frf(law: ContactLaw, drive: ArrayLike, omega_lo: float = 0.8, omega_hi: floa
         return jnp.concatenate([residual(x, o, drive, law, h, n_time),
                                 _peak_condition(x, o, drive, law, h, n_time)[None]])
 
-    zpk, okpk = _newton(peak_fun, zs[i], 30)
+    zpk, okpk = newton(peak_fun, zs[i], 30)
     # accept the refined peak only if it stays beside the best arc point (near a fold
     # the peak system is nearly singular and Newton may wander)
     okpk = okpk & (jnp.abs(zpk[-1] - zs[i, -1]) < 2.0 * ds_max) & (amplitude(zpk[:-1]) >= amp[i])

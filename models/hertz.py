@@ -72,3 +72,31 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike) -> j
     for a weight preload (F0 = m g) this is 3 g / (2 omega0^2), independent of E*.
     """
     return 1.5 * load / (mass * jnp.square(2.0 * jnp.pi * f0))
+
+
+def _law():
+    from .backbone_table import backbone_shift_clipped
+    from .law import YOUNG, ContactLaw
+    from .shift import first_order_hertz
+
+    return ContactLaw(
+        name="hertz", label="Hertz", color="#0072B2",
+        reference="Johnson 1985 Sec. 4.2; paper Eqs. 3, 6, 23",
+        description="elastic sphere on a plane, F = (4/3) E* R^(1/2) delta^(3/2)",
+        params=(YOUNG,),
+        force=lambda delta, *, e_star, radius, **_: force(delta, e_star=e_star, radius=radius),
+        static_overlap=lambda *, load, e_star, radius, **_: static_overlap(
+            load, e_star=e_star, radius=radius),
+        overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
+            f0, load, mass),
+        # the paper analysed this law at first order: its 'paper_eq25' rung is first order
+        rungs=("first_order", "backbone", "paper_eq25"),
+        shifts={"first_order": lambda x, **_: first_order_hertz(x),
+                "paper_eq25": lambda x, **_: first_order_hertz(x),
+                "backbone": lambda x, **_: backbone_shift_clipped(x, EXPONENT)},
+    )
+
+
+LAW = _law()
+"""The Hertz contact law (:class:`models.law.ContactLaw`)."""
+__all__ += ["LAW"]

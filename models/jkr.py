@@ -270,3 +270,42 @@ def overlap_from_frequency(
     es = modulus_from_frequency(f0, load, mass, radius=radius, gamma=gamma)
     a = contact_radius(load, e_star=es, radius=radius, gamma=gamma)
     return overlap_from_contact_radius(a, e_star=es, radius=radius, gamma=gamma)
+
+
+def _law():
+    from .jkr_table import X_MAX, load_ratio, shift_first_order_fast
+    from .law import GAMMA, YOUNG, ContactLaw
+    from .shape_tables import backbone_fast
+
+    def ratio(kw):
+        return load_ratio(kw["load"], gamma=kw["gamma"], radius=kw["radius"])
+
+    def first_order(x, **kw):
+        return shift_first_order_fast(jnp.clip(x, 0.0, X_MAX), ratio(kw))
+
+    return ContactLaw(
+        name="jkr", label="JKR adhesion", color="#D55E00",
+        reference="Johnson, Kendall & Roberts 1971; Johnson 1985 Sec. 5.5; paper Eqs. 13-19",
+        description=("adhesive elastic sphere (large Tabor parameter); contact is taken to "
+                     "part at delta = 0, where the approach branch forms it"),
+        params=(YOUNG, GAMMA),
+        force=lambda delta, *, e_star, radius, gamma, **_: force(
+            delta, e_star=e_star, radius=radius, gamma=gamma),
+        static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
+            load, e_star=e_star, radius=radius, gamma=gamma),
+        # Why not the default stiffness-scale scatter: remounting changes the elastic
+        # scale E* R^(1/2) of the contact, not the adhesion gamma R; scaling the whole JKR
+        # force would scale the adhesion with it. f0, F0, R and gamma fix the state.
+        overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
+            overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
+        # the paper analysed JKR at first order: its 'paper_eq25' rung is first order
+        rungs=("first_order", "backbone", "paper_eq25"),
+        shifts={"first_order": first_order,
+                "paper_eq25": first_order,
+                "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw))},
+    )
+
+
+LAW = _law()
+"""The JKR contact law (:class:`models.law.ContactLaw`)."""
+__all__ += ["LAW"]

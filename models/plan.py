@@ -39,17 +39,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import adhesion, dmt, hertz, jkr, viscoelastic
-from ._plan_base import Effect, Plan, _shift_estimate
-from ._plan_rod import _ROD_Q, _effect_rod, _rod_numbers
+from ._plan_base import Effect, Plan, shift_estimate
+from ._plan_rod import ROD_Q, effect_rod, rod_numbers
 from .backbone import lindstedt_shift
+from .rungs import LADDER
 from .scenes import Scene
 from .shift import first_order_hertz
 
 __all__ = ["Effect", "Plan", "plan_scene", "DEFAULT_TOLERANCE", "RUNGS", "EFFECT_NAMES"]
 
 DEFAULT_TOLERANCE = 5e-3
-RUNGS = ("small-amplitude-series", "first-order", "backbone", "harmonic-balance",
-         "time-integration")
+RUNGS = LADDER  # the ladder's rungs, cheapest first (models.rungs)
 EFFECT_NAMES = ("rod", "rod_waveguide", "rod_dispersion", "adhesion", "viscous_losses",
                 "jumps", "contact_loss", "plasticity", "harmonics")
 _H_MAX = 63
@@ -291,16 +291,16 @@ def _rung(effects: dict, x_max: float, tol: float) -> tuple[str, dict]:
     s_lin = abs(float(lindstedt_shift(x_max, 1.5)))
     err_series = s_lin * x_max**2
     err_first = abs(float(first_order_hertz(min(x_max, 1.0))) - s_lin) + err_series
-    errors = {"small-amplitude-series": err_series, "first-order": err_first}
+    errors = {"series": err_series, "first_order": err_first}
     if effects["contact_loss"].included:
-        return "time-integration", errors
+        return "time_integration", errors
     if (effects["jumps"].included or effects["viscous_losses"].included
             or effects["rod"].included):
-        return "harmonic-balance", errors
+        return "harmonic_balance", errors
     if err_series <= tol:
-        return "small-amplitude-series", errors
+        return "series", errors
     if err_first <= tol:
-        return "first-order", errors
+        return "first_order", errors
     return "backbone", errors
 
 
@@ -345,7 +345,7 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
     q_visc, q_meas = _losses(scene, 2 * math.pi * lin["f0"])
     q = min(q_visc, q_meas)          # most damping: the largest pull of the peak
     q_amp = scene.quality_factor if scene.quality_factor is not None else q_visc
-    rn = _rod_numbers(scene, lin)
+    rn = rod_numbers(scene, lin)
     if rn["r"] < 1.0:
         ac = rn["at_c"]
         g_c, g1_c, d1_c = ac["g"], ac["g1"], 1.0 + ac["g1"] + ac["h1"]
@@ -353,7 +353,7 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
         q_c = q_amp if scene.quality_factor is not None else q_amp * (1.0 + g_c) ** 1.5
     else:
         g1_c, d1_c, q_c = 0.0, 1.0, q_amp
-        t_mag = 1.0 + 4.0 * _ROD_Q / (math.pi * rn["r"] * (1.0 - 0.5 / q))
+        t_mag = 1.0 + 4.0 * ROD_Q / (math.pi * rn["r"] * (1.0 - 0.5 / q))
     if amplitude_max is None:
         amp_max = q_c * t_mag * scene.drive_displacement_max
         amp_source = f"Q_c |T| U_max with Q_c = {q_c:.3g}, |T| = {t_mag:.3g}"
@@ -366,11 +366,11 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
     x_b = amp_max / lin["delta0"]
     x_rod = x_b / (1.0 + g1_c)
 
-    effects = _effect_rod(scene, lin, rn, x_b, x_rod, q, tol)
+    effects = effect_rod(scene, lin, rn, x_b, x_rod, q, tol)
     rod_in = effects[0].included
     x_c = x_rod if rod_in else x_b
     q_j, d_j = (q_c, d1_c) if rod_in else (q_amp, 1.0)
-    s_c = _shift_estimate(x_c)
+    s_c = shift_estimate(x_c)
     # with the rod, S_rod = S0(overlap)/D at equal bead amplitude: the laws differ on the
     # contact's overlap amplitude (the first-order shifts do not hold past contact loss)
     effects.append(_effect_adhesion(scene, regime, lin_h["delta0"], lin_h["f0"], lin,
@@ -381,7 +381,7 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
         # eps kappa/(kappa - psi'') when kappa does; above the first mode the steepest |psi'|
         # of a rod resonance is Q_rod, where psi'' = 0
         kap = 4.0 * q * q
-        dpsi, psi2 = (rn["at_c"]["dpsi"], rn["at_c"]["psi2"]) if rn["r"] < 1.0 else (_ROD_Q, 0.)
+        dpsi, psi2 = (rn["at_c"]["dpsi"], rn["at_c"]["psi2"]) if rn["r"] < 1.0 else (ROD_Q, 0.)
         pull = abs(dpsi) * kap / (kap - psi2) ** 2 * 2.0 * _damping_change(lin, x_c) \
             if psi2 < kap else math.inf
     effects.append(_effect_viscous(q, q_visc, tol, pull))

@@ -74,3 +74,45 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike,
                            n: ArrayLike) -> jnp.ndarray:
     """delta0 = n F0 / (m omega0^2) [m]; n g / omega0^2 for a weight preload."""
     return n * load / (mass * jnp.square(2.0 * jnp.pi * f0))
+
+
+def _law():
+    import math
+
+    from .backbone_table import backbone_shift_clipped
+    from .law import ContactLaw, Param, Prior
+    from .shift import first_order_powerlaw
+
+    n = Param("n", "-", r"$n$", Prior("uniform", 1.0, 3.0),
+              "Load-overlap exponent, F = C delta^n. Prior Uniform(1, 3): n = (1 + H)/H for "
+              "Hurst exponent 0.5 <= H < inf; n = 3/2 is Hertz, n = 2 a soft oxide shell; "
+              "n < 1 would soften under compression, n > 3 is beyond any self-affine surface.")
+    ref = Param("delta0_ref_log", "log m", r"$\ln\delta_{0,\mathrm{ref}}$",
+                Prior("normal", math.log(55e-9), 1.0),
+                "Natural log of the static overlap under the weight at the nominal mount "
+                "(the prefactor C is not identifiable apart from it). Prior Normal(log 55 nm, "
+                "1): the Hertz overlap under the bead's weight is 50-55 nm; a rough or coated "
+                "contact sits within a factor of e of it.")
+
+    def _force(delta, *, n, delta0_ref_log, load, **_):
+        return load * safe_pow(delta / jnp.exp(delta0_ref_log), n)
+
+    return ContactLaw(
+        name="powerlaw", label="rough power law", color="#E69F00",
+        reference="paper Sec. 4.4, Eqs. 21, 26-27",
+        description="F = C delta^n; the exponent n carries the roughness",
+        params=(n, ref), force=_force,
+        static_overlap=lambda *, delta0_ref_log, **_: jnp.exp(delta0_ref_log),
+        overlap_from_frequency=lambda f0, *, load, mass, n, **_: overlap_from_frequency(
+            f0, load, mass, n),
+        # the paper analysed this law at first order: its 'paper_eq25' rung is first order
+        rungs=("first_order", "backbone", "paper_eq25"),
+        shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),
+                "paper_eq25": lambda x, *, n, **_: first_order_powerlaw(x, n),
+                "backbone": lambda x, *, n, **_: backbone_shift_clipped(x, n)},
+    )
+
+
+LAW = _law()
+"""The rough power law (:class:`models.law.ContactLaw`)."""
+__all__ += ["LAW"]

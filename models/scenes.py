@@ -21,7 +21,9 @@ Layout (SI units, the unit is part of every key name)::
 
 ``displacement_per_volt`` is the rod-end (base) displacement amplitude per drive volt.
 Errors (:class:`SceneError`) name the file and the key; unknown keys are rejected with
-the closest valid key suggested. ``young_range`` applies to the bead material and, when
+the closest valid key suggested. Every number must lie within the physical bounds of
+``BOUNDS`` (each with its reason), so that no derived quantity (mass, load, static
+overlap) can be infinite or zero. ``young_range`` applies to the bead material and, when
 the rod is made of the same named material, to the rod too (paper: both are the steel).
 """
 
@@ -54,6 +56,8 @@ __all__ = [
     "scene_from_dict",
     "scene_to_dict",
     "BUILTIN_DIR",
+    "BOUNDS",
+    "QUALITY_FACTOR_MAX",
 ]
 
 BUILTIN_DIR = Path(__file__).parent / "scenes"
@@ -156,6 +160,38 @@ class Scene:
 
 # --- TOML schema --------------------------------------------------------------------------
 
+QUALITY_FACTOR_MAX = 1e5
+"""Largest credible Q of a bead resonance: ten times the Q of steel's own internal
+friction (loss factor ~1e-4, Q ~ 1e4); a bead held in a lossy contact cannot ring
+longer than its material does."""
+
+_LENGTH = (1e-9, 10.0, "from 1 nm (a few atoms: continuum contact mechanics ends) to 10 m "
+           "(a laboratory)")
+_FREQ = (1e-2, 1e10, "from 10 mHz to 10 GHz (the highest acoustic resonators)")
+BOUNDS: dict[str, tuple[float, float, str]] = {
+    "young_Pa": (1e3, 1.2e12, "from soft gels (~1 kPa) to diamond (1.2 TPa), the stiffest "
+                 "solid"),
+    "density_kg_m3": (1.0, 2.3e4, "from aerogels (~1 kg/m^3) to osmium (22.6e3 kg/m^3), the "
+                      "densest element"),
+    "yield_strength_Pa": (1e3, 1.2e11, "at most the ideal strength, ~E/10, of the stiffest "
+                          "solid"),
+    "radius_m": _LENGTH, "diameter_m": _LENGTH, "length_m": _LENGTH,
+    "first_resonance_Hz": _FREQ, "f_min_Hz": _FREQ, "f_max_Hz": _FREQ,
+    "extra_force_N": (-1e6, 1e6, "|F| up to 1 MN, a hydraulic press"),
+    "gravity_m_s2": (0.0, 1e7, "up to 1e6 g, an ultracentrifuge"),
+    "roughness_rms_m": (0.0, 1e-3, "up to 1 mm rms, a rough casting rather than a contact "
+                        "surface"),
+    "surface_energy_J_m2": (0.0, 10.0, "up to 10 J/m^2; the highest metal surface energies "
+                            "are ~3 J/m^2 (tungsten)"),
+    "viscosity_Pa_s": (0.0, 1e15, "up to 1e15 Pa s; glass at its transition is 1e12 Pa s"),
+    "quality_factor": (0.5, QUALITY_FACTOR_MAX, "above 1/2 (a resonance at all) and at most "
+                       "ten times the Q of steel's own internal friction"),
+    "voltage_min_V": (0.0, 1e4, "up to 10 kV, beyond any piezo amplifier"),
+    "voltage_max_V": (0.0, 1e4, "up to 10 kV, beyond any piezo amplifier"),
+    "displacement_per_volt_m_V": (0.0, 1e-3, "up to 1 mm/V; piezo stacks give ~0.1 um/V"),
+}
+"""Physical bounds [SI unit of the key] on every number of a scene, with the reason."""
+
 _REQ, _OPT = True, False
 _TOP = {"name": (_REQ, str), "description": (_OPT, str), "young_range_Pa": (_OPT, list),
         "materials": (_REQ, dict), "bead": (_REQ, dict), "rod": (_REQ, dict),
@@ -200,6 +236,11 @@ def _num(table: dict, key: str, source: str, where: str, *, positive: bool = Tru
         raise SceneError(f"{source}: {where}'{key}' must be > 0, got {v!r}")
     if nonneg and v < 0:
         raise SceneError(f"{source}: {where}'{key}' must be >= 0, got {v!r}")
+    if key in BOUNDS:
+        lo, hi, why = BOUNDS[key]
+        if not lo <= v <= hi:
+            raise SceneError(f"{source}: {where}'{key}' = {v!r} lies outside the physical "
+                             f"bounds [{lo:g}, {hi:g}] ({why})")
     return v
 
 
@@ -303,6 +344,9 @@ def scene_from_dict(d: dict, source: str = "<dict>") -> Scene:
 def load_scene(path: str | Path) -> Scene:
     """Read a scene TOML file; errors name the file and the offending key."""
     path = Path(path)
+    if path.is_dir():
+        raise SceneError(f"{path}: is a folder, not a scene file (give its .toml file; "
+                         "models/scenes/paper.toml shows the layout)")
     try:
         with open(path, "rb") as fh:
             d = tomllib.load(fh)
@@ -310,6 +354,10 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError(f"{path}: no such scene file") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise SceneError(f"{path}: not UTF-8 text, so not a TOML file") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the scene file ({exc.strerror})") from None
     return scene_from_dict(d, str(path))
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from ._hyp import NEG_INF_GRAD, mean_power_at_one, mean_power_clipped
+from .quadrature import tanh_sinh
 
 __all__ = [
     "first_order_adhesive",
@@ -113,16 +114,6 @@ def first_order_hertz(x: ArrayLike) -> jnp.ndarray:
     return jnp.where(is_one, at_one, mean) / 2.0 - 0.5
 
 
-def _tanh_sinh(nodes: int, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """Double-exponential nodes u in (0, 1) and weights for Int_0^1 f(u) du."""
-    k = np.arange(nodes) - (nodes - 1) / 2.0
-    tau = k * h
-    s = 0.5 * np.pi * np.sinh(tau)
-    u = 0.5 * (1.0 + np.tanh(s))
-    w = 0.5 * h * 0.5 * np.pi * np.cosh(tau) / np.cosh(s) ** 2
-    return u, w
-
-
 def first_order_from_stiffness(
     stiffness_fn: Callable[[jnp.ndarray], jnp.ndarray],
     delta0: ArrayLike,
@@ -153,7 +144,7 @@ def first_order_from_stiffness(
     delta0, x = jnp.broadcast_arrays(delta0, x)
     if k0 is None:
         k0 = stiffness_fn(delta0)
-    u, w = _tanh_sinh(nodes, h=6.4 / (nodes - 1))
+    u, w = tanh_sinh(nodes, h=6.4 / (nodes - 1))
     xs = jnp.where(x > 1.0, x, 2.0)
     phi0 = jnp.where(x > 1.0, jnp.arccos(-1.0 / xs), jnp.pi)
     phi = phi0[None] * jnp.asarray(u).reshape((-1,) + (1,) * x.ndim)

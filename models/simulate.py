@@ -63,8 +63,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import adhesion
-from ._peak import _min_overlap, _peaks_along
-from ._sweep import HBM_WAVEGUIDE_MODES, _Dyn, _dynamics, _hbm_sweep, _lin, _ti_sweep, rod_modes
+from ._peak import min_overlap, peaks_along
+from ._sweep import (
+    HBM_WAVEGUIDE_MODES,
+    Dyn,
+    build_dynamics,
+    hbm_sweep,
+    linear_contact,
+    rod_modes,
+    ti_sweep,
+)
 from .hbm import default_time_samples
 from .plan import EFFECT_NAMES, Plan, plan_scene
 from .scenes import Scene
@@ -119,7 +127,7 @@ class Simulator:
     scene: Scene
     plan: Plan
     built: frozenset
-    dyn: _Dyn
+    dyn: Dyn
     delta0: float
     f0: float
     k0: float
@@ -151,8 +159,8 @@ class Simulator:
             roots = np.sqrt([(b - dsc) / 2, (b + dsc) / 2])
             om0 = float(roots[np.argmin(np.abs(roots - 1.0))])   # the contact's branch
         e0 = float(jax.grad(lambda v: d.law.force(1.0, v))(0.0) / d.law.slope)
-        return _peaks_along(d, np.asarray(amps_rel, float), om0, max(e0, 1e-6),
-                            self.harmonics, self.n_time, bead)
+        return peaks_along(d, np.asarray(amps_rel, float), om0, max(e0, 1e-6),
+                           self.harmonics, self.n_time, bead)
 
     def peak(self, amplitude: float, *, bead: bool = True, steps: int = 12) -> dict:
         """Harmonic-balance resonance peak whose first-harmonic amplitude (the bead's, else
@@ -175,7 +183,7 @@ class Simulator:
         self._check_plastic(ai * self.delta0)
         return {"shift": float(om[-1] / om[0] - 1.0), "frequency_Hz": float(om[-1] * self.f0),
                 "base_displacement_m": float(e[-1] * self.delta0),
-                "min_overlap": float(_min_overlap(x[-1], self.harmonics))}
+                "min_overlap": float(min_overlap(x[-1], self.harmonics))}
 
     def shift_at(self, amplitudes, *, bead: bool = True, steps: int = 12) -> np.ndarray:
         """Delta f/f0 of the resonance peak at each amplitude [m] (see :meth:`peak`)."""
@@ -197,14 +205,14 @@ class Simulator:
                 "no elastic law applies")
 
     def _sweep(self, drive, grid, start):
-        if self.method == "time-integration":
-            ys, ab, aq = _ti_sweep(self.dyn, drive, jnp.asarray(grid), start,
-                                   self.steps_per_period, self.settle_periods,
-                                   self.measure_periods)
+        if self.method == "time_integration":
+            ys, ab, aq = ti_sweep(self.dyn, drive, jnp.asarray(grid), start,
+                                  self.steps_per_period, self.settle_periods,
+                                  self.measure_periods)
             ok = np.ones(len(grid), bool)
         else:
-            ys, ok, ab, aq = _hbm_sweep(self.dyn, drive, jnp.asarray(grid), start,
-                                        self.harmonics, self.n_time)
+            ys, ok, ab, aq = hbm_sweep(self.dyn, drive, jnp.asarray(grid), start,
+                                       self.harmonics, self.n_time)
         # where the sampled residual has no root (its force jumps at contact loss) Newton
         # stops on a cycle, not a solution: no reading there
         ok = np.asarray(ok)
@@ -219,7 +227,7 @@ class Simulator:
     def _start(self) -> jnp.ndarray:
         """Rest: the state a sweep starts from."""
         nm = self.dyn.rho.shape[0]
-        return jnp.zeros(2 + 2 * nm) if self.method == "time-integration" \
+        return jnp.zeros(2 + 2 * nm) if self.method == "time_integration" \
             else jnp.zeros(2 * self.harmonics + 1)
 
     def _levels_and_grid(self, drive_levels, n_freq, band):
@@ -292,7 +300,7 @@ class Simulator:
 
     def built_description(self) -> dict:
         d = {"contact_law": self.law_name, "method": self.method,
-             "harmonics": self.harmonics if self.method == "harmonic-balance" else None,
+             "harmonics": self.harmonics if self.method == "harmonic_balance" else None,
              "rod_modes": int(self.dyn.rho.shape[0]),
              "rod_mode_frequencies_Hz": [float(f) for f in self.rod_frequencies[:6]]}
         return {"effects": sorted(self.built), **d}
@@ -343,11 +351,11 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
         notes.append("Maugis-Dugdale selected by the adhesion map: simulated with the plan's "
                      "bracket law JKR (no Maugis-Dugdale force implemented); the plan's "
                      "adhesion bound brackets it by DMT")
-    d0, k0 = _lin(scene, law_sim)
+    d0, k0 = linear_contact(scene, law_sim)
     omega0 = math.sqrt(k0 / scene.mass)
     s = k0 * d0 / scene.load
 
-    method = "time-integration" if "contact_loss" in built else "harmonic-balance"
+    method = "time_integration" if "contact_loss" in built else "harmonic_balance"
     if harmonics is not None:
         h = int(harmonics)
         built = built | {"harmonics"} if h > 1 else built - {"harmonics"}
@@ -355,13 +363,13 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
         h = plan.harmonics if plan.harmonics > 1 else 3
     else:
         h = 1
-    dyn, fr = _dynamics(scene, plan, built, law_sim, d0, omega0, s, method, rod_q, ti_modes,
-                        notes)
+    dyn, fr = build_dynamics(scene, plan, built, law_sim, d0, omega0, s, method, rod_q, ti_modes,
+                             notes)
     rho = np.asarray(dyn.rho)
     if steps is None:   # RK4 stability (|lambda dt| < 2.8) for the stiffest rod mode
         steps = int(max(128, 2 ** np.ceil(np.log2(2 * np.pi * 1.3 * max(rho.max(initial=0),
                                                                           1) / 2.0))))
-    if plan.rung not in ("harmonic-balance", "time-integration") and method != plan.rung:
+    if plan.rung not in ("harmonic_balance", "time_integration") and method != plan.rung:
         notes.append(f"plan's rung '{plan.rung}' is a conservative estimate; the simulator's "
                      "cheapest forced-response rung is harmonic balance")
     return Simulator(scene, plan, frozenset(built), dyn, d0, omega0 / (2 * np.pi), k0, h,

@@ -215,3 +215,60 @@ def shift_paper_without_first_order(
     """
     ratio = 1.0 + 2.0 * shift_paper_eq25(x, damping_constant=damping_constant, omega=omega)
     return without_first_order(ratio)
+
+
+def _law(split: bool):
+    from .backbone_table import backbone_shift_clipped
+    from .law import YOUNG, ContactLaw, Param, Prior
+
+    def eta(name, what):
+        return Param(name, "Pa s", {"eta": r"$\eta$", "eta_shift": r"$\eta_\mathrm{shift}$",
+                                    "eta_q": r"$\eta_Q$"}[name], Prior("loguniform", 1e2, 1e8),
+                     f"Bulk viscosity eta1 = eta2 {what} (paper Eq. 9). Prior LogUniform(1e2, "
+                     "1e8) Pa s: unknown over decades; the paper's shift fit gives 1.05e6, its "
+                     "measured Q = 20-100 implies 5e4-3e5; the interval brackets both by more "
+                     "than two decades either way (scale-invariant).",
+                     display=("MPa s", 1e6), scene_key="viscosity")
+
+    if split:
+        params = (YOUNG, eta("eta_shift", "that enters the shift (only under the paper's "
+                             "Eq. 25)"), eta("eta_q", "that sets the linear Q"))
+        e_shift, e_q = "eta_shift", "eta_q"
+    else:
+        params = (YOUNG, eta("eta", "(one viscosity for shift and Q)"))
+        e_shift = e_q = "eta"
+
+    def a(kw, name):
+        return damping_constant(eta1=kw[name], eta2=kw[name], young=kw["young"],
+                                poisson=kw["poisson"])
+
+    return ContactLaw(
+        name="viscoelastic_split" if split else "viscoelastic",
+        label="viscoelastic (split eta)" if split else "viscoelastic",
+        color="#009E73" if not split else "#56B4E9",
+        reference="Brilliantov et al. 1996; Kuwabara & Kono 1987; paper Eqs. 8-9, 25, 30",
+        description=("Hertz + Kuwabara-Kono damping; " + (
+            "separate viscosities for the shift (Eq. 25) and for Q: the tension test"
+            if split else "one viscosity predicts both the shift (Eq. 25) and Q")),
+        params=params,
+        force=lambda delta, *, e_star, radius, **_: hertz.force(delta, e_star=e_star,
+                                                                 radius=radius),
+        static_overlap=lambda *, load, e_star, radius, **_: hertz.static_overlap(
+            load, e_star=e_star, radius=radius),
+        overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
+            f0, load, mass),
+        rungs=("first_order", "backbone", "paper_eq25"),
+        shifts={"first_order": lambda x, **_: shift_first_order(x),
+                "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),
+                "paper_eq25": lambda x, *, omega0, **kw: shift_paper_eq25(
+                    x, damping_constant=a(kw, e_shift), omega=omega0)},
+        linear_q=lambda *, omega0, **kw: linear_q(damping_constant=a(kw, e_q), omega0=omega0),
+        tension_role="split" if split else "shared",
+    )
+
+
+LAW = _law(split=False)
+"""The viscoelastic law, one viscosity (:class:`models.law.ContactLaw`)."""
+SPLIT_LAW = _law(split=True)
+"""The viscoelastic law with separate viscosities for shift and Q (the tension test)."""
+__all__ += ["LAW", "SPLIT_LAW"]

@@ -19,8 +19,9 @@ import pytest
 
 from workflows.cli import COMMAND_MODULES, build_parser, main
 
+# --allow-failed: a few draws fail the gate, which would make the exit status 1
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--live-points", "30",
-        "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet"]
+        "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet", "--allow-failed"]
 
 
 def _subcommands() -> list[str]:
@@ -56,9 +57,9 @@ def test_scene_shift_plan_json(capsys):
     assert plan["effects"]
 
 
-def test_shift_rejects_law_without_backbone(capsys):
-    assert main(["shift", "--law", "jkr", "--x", "0.5", "--method", "backbone"]) == 2
-    assert "no backbone" in capsys.readouterr().err
+def test_shift_rejects_unknown_law(capsys):
+    assert main(["shift", "--law", "hertzz", "--x", "0.5"]) == 2
+    assert "did you mean 'hertz'" in capsys.readouterr().err
 
 
 def test_validate_and_bad_data_exit_code(tmp_path, capsys):
@@ -81,7 +82,8 @@ def test_simulate_writes_a_loadable_dataset(tmp_path):
     assert main(["validate", str(out)]) == 0
 
 
-@pytest.mark.parametrize("which", ["physics", "inference", "device"])
+@pytest.mark.parametrize("which", ["physics", pytest.param("inference", marks=pytest.mark.slow),
+                                   "device"])
 def test_bench_quick(tmp_path, which):
     assert main(["bench", which, "--quick", "--quiet", "--out", str(tmp_path)]) == 0
     md = next(tmp_path.glob("*.md")).read_text()
@@ -196,7 +198,7 @@ def test_rungs_writes_its_tables(tmp_path, capsys):
     out = tmp_path / "rungs"
     assert main(["rungs", "--laws", "hertz", "--rungs", "first_order,backbone", "--out",
                  str(out), "--chains", "2", "--warmup", "40", "--samples", "40",
-                 "--workers", "1", "--quiet"]) == 0
+                 "--workers", "1", "--quiet", "--allow-failed"]) == 0
     table = pd.read_csv(out / "rungs.csv")
     ev = table[table["table"] == "evidence"]
     assert list(ev["law"]) == ["hertz"] and list(ev["rung"]) == ["backbone"]
@@ -210,7 +212,7 @@ def test_rungs_writes_its_tables(tmp_path, capsys):
     assert main(["rungs", "--rungs", "backbone", "--out", str(tmp_path / "x")]) == 2
     assert "two or more distinct rungs" in capsys.readouterr().err
     from inference.numpyro_models import RUNGS
-    from workflows.rungs import RUNGS as CLI_RUNGS
+    from workflows.config import RUNGS as CLI_RUNGS
 
     assert set(CLI_RUNGS) == set(RUNGS)  # the CLI's copy of the list
 

@@ -1,4 +1,5 @@
-"""One test per kind of bad input: the DataError names the file, the row and the column."""
+"""One test per kind of bad input: the DataError names the file, the line (as a text editor
+numbers it: the header is line 1) and the column."""
 
 import argparse
 
@@ -40,12 +41,12 @@ def replace(row_index, column, value, rows=GOOD, header=HEADER):
     return out
 
 
-def check(tmp_path, scene_text, rows, row, column, *extra, header=HEADER):
+def check(tmp_path, scene_text, rows, line, column, *extra, header=HEADER):
     with pytest.raises(DataError) as e:
         load_dataset(write(tmp_path, scene_text, rows, header))
     msg = str(e.value)
     assert "measurements.csv" in msg, msg
-    assert (row if isinstance(row, str) else f"row {row}") in msg, msg
+    assert (line if isinstance(line, str) else f"line {line}") in msg, msg
     assert f"column '{column}'" in msg, msg
     for word in extra:
         assert word in msg, msg
@@ -55,78 +56,79 @@ def check(tmp_path, scene_text, rows, row, column, *extra, header=HEADER):
 def test_good_table_loads(tmp_path, scene_text):
     ds = load_dataset(write(tmp_path, scene_text, GOOD))
     assert len(ds.table) == len(GOOD) and ds.table["row"].min() == 1
+    assert sorted(ds.table["line"]) == list(range(2, len(GOOD) + 2))  # header on line 1
 
 
 def test_missing_column(tmp_path, scene_text):
     header = HEADER.replace(",f_res_Hz", "")
     rows = [",".join(r.split(",")[:5] + r.split(",")[6:]) for r in GOOD]
-    check(tmp_path, scene_text, rows, "header", "f_res_Hz", "missing", header=header)
+    check(tmp_path, scene_text, rows, "line 1 (header)", "f_res_Hz", "missing", header=header)
 
 
 def test_unknown_column_suggests_closest(tmp_path, scene_text):
     header = HEADER.replace("amplitude_m", "amplitude_nm")
-    check(tmp_path, scene_text, GOOD, "header", "amplitude_nm", "did you mean 'amplitude_m'",
-          header=header)
+    check(tmp_path, scene_text, GOOD, "line 1 (header)", "amplitude_nm",
+          "did you mean 'amplitude_m'", header=header)
 
 
 def test_non_numeric(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(2, "f_res_Hz", "2.7k"), 3, "f_res_Hz", "not a number")
+    check(tmp_path, scene_text, replace(2, "f_res_Hz", "2.7k"), 4, "f_res_Hz", "not a number")
 
 
 def test_nan_value(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(1, "amplitude_m", "NaN"), 2, "amplitude_m", "NaN")
+    check(tmp_path, scene_text, replace(1, "amplitude_m", "NaN"), 3, "amplitude_m", "NaN")
 
 
 def test_empty_required_value(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(3, "drive_voltage_V", ""), 4, "drive_voltage_V", "empty")
+    check(tmp_path, scene_text, replace(3, "drive_voltage_V", ""), 5, "drive_voltage_V", "empty")
 
 
 @pytest.mark.parametrize("column,value", [("f_res_Hz", "0"), ("amplitude_m", "-2e-8"),
                                           ("drive_voltage_V", "0.0")])
 def test_zero_or_negative(tmp_path, scene_text, column, value):
-    check(tmp_path, scene_text, replace(5, column, value), 6, column, "positive")
+    check(tmp_path, scene_text, replace(5, column, value), 7, column, "positive")
 
 
 @pytest.mark.parametrize("value", ["25.0", "0.025"])  # 25 nm, 0.025 um written as m
 def test_amplitude_in_nm_or_um(tmp_path, scene_text, value):
-    check(tmp_path, scene_text, replace(2, "amplitude_m", value), 3, "amplitude_m",
+    check(tmp_path, scene_text, replace(2, "amplitude_m", value), 4, "amplitude_m",
           "nm or um written as m")
 
 
 def test_frequency_in_khz(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(0, "f_res_Hz", "2.7"), 1, "f_res_Hz", "sweep band")
+    check(tmp_path, scene_text, replace(0, "f_res_Hz", "2.7"), 2, "f_res_Hz", "sweep band")
 
 
 def test_duplicate_key(tmp_path, scene_text):
     rows = GOOD + ["A,1,drive,down,0.6,2686.0,3.0e-8,"]
-    check(tmp_path, scene_text, rows, 7, "step", "duplicate", "row 3")
+    check(tmp_path, scene_text, rows, 8, "step", "duplicate", "line 4")
 
 
 def test_protocol_without_reference(tmp_path, scene_text):
     rows = GOOD + ["C,1,drive,up,0.5,2600.0,2.0e-8,", "C,2,drive,up,0.7,2590.0,3.0e-8,"]
-    check(tmp_path, scene_text, rows, 7, "kind", "'C' has no reference")
+    check(tmp_path, scene_text, rows, 8, "kind", "'C' has no reference")
 
 
 def test_drive_before_first_reference(tmp_path, scene_text):
     rows = GOOD + ["B,2,reference,up,0.01,2650.0,4.0e-10,30.0"]
     rows = replace(4, "step", "3", rows)
     rows = replace(6, "step", "4", rows)
-    check(tmp_path, scene_text, rows, 6, "step", "before the first reference")
+    check(tmp_path, scene_text, rows, 7, "step", "before the first reference")
 
 
 @pytest.mark.parametrize("column,value,hint", [("kind", "calibration", "allowed"),
                                                ("kind", "Drive", "did you mean 'drive'"),
                                                ("direction", "upward", "did you mean 'up'")])
 def test_unknown_kind_or_direction(tmp_path, scene_text, column, value, hint):
-    check(tmp_path, scene_text, replace(1, column, value), 2, column, hint)
+    check(tmp_path, scene_text, replace(1, column, value), 3, column, hint)
 
 
 def test_step_not_integer(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(1, "step", "1.5"), 2, "step", "integer")
+    check(tmp_path, scene_text, replace(1, "step", "1.5"), 3, "step", "integer")
 
 
 def test_q_not_a_resonance(tmp_path, scene_text):
-    check(tmp_path, scene_text, replace(0, "q_factor", "0.2"), 1, "q_factor", "Q > 1/2")
+    check(tmp_path, scene_text, replace(0, "q_factor", "0.2"), 2, "q_factor", "Q > 1/2")
 
 
 CURVE_HEADER = HEADER + ",curve"
@@ -137,7 +139,7 @@ def curve_rows(curve):
 
 
 def test_missing_curve_file(tmp_path, scene_text):
-    check(tmp_path, scene_text, curve_rows("curves/none.csv"), 2, "curve", "not found",
+    check(tmp_path, scene_text, curve_rows("curves/none.csv"), 3, "curve", "not found",
           header=CURVE_HEADER)
 
 
@@ -146,9 +148,10 @@ def test_malformed_curve_file(tmp_path, scene_text):
     (tmp_path / "curves" / "bad.csv").write_text(
         "frequency_Hz,amplitude_m\n" + "".join(f"{2600 + i},1e-9\n" for i in range(5))
         + "2606,oops\n2607,1e-9\n")
-    msg = check(tmp_path, scene_text, curve_rows("curves/bad.csv"), 6, "amplitude_m",
+    msg = check(tmp_path, scene_text, curve_rows("curves/bad.csv"), 7, "amplitude_m",
                 header=CURVE_HEADER)
-    assert "bad.csv" in msg and "row 2" in msg  # the curve file and the measurement row
+    assert "bad.csv" in msg and "line 3" in msg  # the curve file and the measurement line
+    assert "oops" not in msg  # the curve's content is not echoed
 
 
 def test_curve_values_replace_table(tmp_path, scene_text):
@@ -164,7 +167,7 @@ def test_curve_values_replace_table(tmp_path, scene_text):
     rows = replace(1, "f_res_Hz", "", rows, CURVE_HEADER)
     rows = replace(1, "amplitude_m", "", rows, CURVE_HEADER)
     ds = load_dataset(write(tmp_path, scene_text, rows, CURVE_HEADER))
-    r = ds.table[ds.table["row"] == 2].iloc[0]
+    r = ds.table[ds.table["line"] == 3].iloc[0]
     assert r["f_res_Hz"] == pytest.approx(2683.21, abs=0.01)
     assert r["amplitude_m"] == pytest.approx(3e-8, rel=1e-4)
     assert r["q_factor"] == pytest.approx(25.0, rel=5e-3)
@@ -183,5 +186,5 @@ def test_validate_command_reports_bad_data(tmp_path, scene_text):
     cmd_validate.register(parser.add_subparsers())
     folder = write(tmp_path, scene_text, replace(2, "f_res_Hz", "2.7k"))
     args = parser.parse_args(["validate", str(folder)])
-    with pytest.raises(DataError, match=r"measurements.csv, row 3, column 'f_res_Hz'"):
+    with pytest.raises(DataError, match=r"measurements.csv, line 4, column 'f_res_Hz'"):
         args.func(args)

@@ -95,20 +95,32 @@ def test_read_curve_sorts_down_sweep(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "text,row,col",
+    "text,line,col",
     [
-        ("frequency_Hz,amp\n" + _good_rows(), "header", "amp"),
-        ("frequency_Hz,phase_rad\n" + _good_rows(), "header", "amplitude_m"),
+        ("frequency_Hz,amp\n" + _good_rows(), "line 1 (header)", "column 2"),
+        ("frequency_Hz,phase_rad\n" + _good_rows(), "line 1 (header)", "column 'amplitude_m'"),
         ("frequency_Hz,amplitude_m\n" + _good_rows(3) + "2700,abc\n" + _good_rows(5)[:-1],
-         "row 4", "amplitude_m"),
+         "line 5", "column 'amplitude_m'"),
         ("frequency_Hz,amplitude_m\n" + _good_rows(4) + "2610,1e-9\n" + _good_rows(5)[:-1],
-         "row 5", "frequency_Hz"),
-        ("frequency_Hz,amplitude_m\n" + "2600,-1e-9\n" + _good_rows(8), "row 1", "amplitude_m"),
-        ("frequency_Hz,amplitude_m\n" + _good_rows(3), "row 3", "frequency_Hz"),
+         "line 6", "column 'frequency_Hz'"),
+        ("frequency_Hz,amplitude_m\n" + "2600,-1e-9\n" + _good_rows(8), "line 2",
+         "column 'amplitude_m'"),
+        ("frequency_Hz,amplitude_m\n" + _good_rows(3), "line 4", "column 'frequency_Hz'"),
+        ("frequency_Hz,amplitude_m\n\n" + _good_rows(2) + "\n2700,abc\n" + _good_rows(5),
+         "line 6", "column 'amplitude_m'"),  # blank lines count, as in an editor
     ],
 )
-def test_read_curve_errors_name_place(tmp_path, text, row, col):
+def test_read_curve_errors_name_place(tmp_path, text, line, col):
     with pytest.raises(DataError) as e:
         read_curve(_write(tmp_path, text), label="sweep.csv")
     msg = str(e.value)
-    assert "sweep.csv" in msg and row in msg and f"'{col}'" in msg
+    assert f"sweep.csv, {line}, {col}" in msg, msg
+    assert "abc" not in msg and "'amp'" not in msg  # the file's content is never echoed
+
+
+def test_read_curve_header_hint_without_echo(tmp_path):
+    with pytest.raises(DataError) as e:
+        read_curve(_write(tmp_path, "frequency_Hz,amplitude_nm\n" + _good_rows()),
+                   label="sweep.csv")
+    assert "did you mean 'amplitude_m'" in str(e.value)
+    assert "amplitude_nm" not in str(e.value)

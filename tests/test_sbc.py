@@ -1,7 +1,8 @@
-"""Simulation-based calibration of the viscoelastic model."""
+"""Simulation-based calibration of the viscoelastic model; its ECDF band and files."""
 
+import json
+import math
 import os
-import types
 from pathlib import Path
 
 import numpy as np
@@ -9,14 +10,17 @@ import pytest
 
 from inference.likelihood import design_inputs
 from inference.numpyro_models import ModelSpec
-from inference.sbc import SBCResult, plot_ecdf, run_sbc, uniformity_pvalue
-from models import materials
+from inference.sbc import (
+    SBCResult,
+    dkw_halfwidth,
+    ecdf_difference,
+    run_sbc,
+    uniformity_pvalue,
+)
+from models.scenes import builtin_scene
+from workflows.sbc_outputs import plot_ecdf, write_sbc_json
 
-R = 7.938e-3
-ST = materials.STAINLESS_STEEL
-SCENE = types.SimpleNamespace(mass=float(materials.bead_mass(R, ST.density)),
-                              load=float(materials.bead_weight(R, ST.density)),
-                              radius=R, bead_material=ST, rod_material=ST)
+SCENE = builtin_scene("paper")  # the paper's bead on its rod
 SPEC = ModelSpec("viscoelastic", rung="paper_eq25")
 
 
@@ -37,6 +41,30 @@ def test_sbc_small_runs_and_plots(tmp_path):
     assert all(0.0 <= p <= 1.0 for p in res.pvalues.values())
     out = plot_ecdf(res, tmp_path / "sbc.png")
     assert out.exists() and out.stat().st_size > 1000
+    back = json.loads(write_sbc_json(res, tmp_path / "sbc.json").read_text())
+    assert back["ranks"] == {k: v.tolist() for k, v in res.ranks.items()}
+    assert back["n_draws"] == 100 and len(back["divergences"]) == 4
+    assert not list(tmp_path.glob(".*part*"))  # atomic writes leave no temporary
+
+
+def test_dkw_band_matches_massart_bound_and_covers_uniform_ranks():
+    # Massart (1990): P(sup|F_n - F| > eps) <= 2 exp(-2 n eps^2) = alpha
+    eps = dkw_halfwidth(100, 0.05)
+    assert 2 * math.exp(-2 * 100 * eps**2) == pytest.approx(0.05, rel=1e-12)
+    assert eps == pytest.approx(0.13581, abs=1e-5)
+    with pytest.raises(ValueError):
+        dkw_halfwidth(0)
+    rng = np.random.default_rng(3)
+    n_draws = 99
+    good = SBCResult({"a": rng.integers(0, n_draws + 1, 400)}, n_draws, {"a": 1.0}, 0.0)
+    grid, diff, eps = ecdf_difference(good)
+    assert grid[0] == 0.0 and grid[-1] == 1.0 and diff["a"].shape == grid.shape
+    assert np.max(np.abs(diff["a"])) < eps  # uniform ranks stay inside the band
+    # a posterior biased high puts the truth low: every rank in the bottom fifth
+    biased = SBCResult({"a": rng.integers(0, 20, 400)}, n_draws, {"a": 0.0}, 0.0)
+    _, diff, eps = ecdf_difference(biased)
+    assert diff["a"][np.searchsorted(grid, 0.2)] == pytest.approx(0.8, abs=0.01)
+    assert np.max(diff["a"]) > eps
 
 
 @pytest.mark.slow

@@ -152,3 +152,49 @@ def test_scene_command_text_and_error(tmp_path, capsys):
     with pytest.raises(UserError, match="did you mean"):
         _run_cli(["scene", str(_toml(tmp_path, BASE.replace("radius_m =", "radius =")))],
                  capsys)
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ("radius_m = 7.938e-3", "radius_m = 1e300", "'radius_m'"),  # delta0 = inf before
+    ("density_kg_m3 = 7700", "density_kg_m3 = 1e300", "'density_kg_m3'"),
+    ("young_Pa = 200e9", "young_Pa = 1e300", "'young_Pa'"),
+    ("voltage_max_V = 1", "voltage_max_V = 1e308", "'voltage_max_V'"),
+    ("surface_energy_J_m2 = 0.7", "surface_energy_J_m2 = 0.7\nquality_factor = 1e308",
+     "'quality_factor'"),
+    ("length_m = 0.1", "length_m = 1e-300", "'length_m'"),
+])
+def test_values_outside_physical_bounds(tmp_path, old, new, key):
+    assert old in BASE
+    p = _toml(tmp_path, BASE.replace(old, new, 1), "absurd.toml")
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(p)
+    msg = str(exc.value)
+    assert msg.count(str(p)) == 1 and key in msg and "physical bounds" in msg, msg
+
+
+def test_every_builtin_lies_within_the_bounds():
+    # the bounds are checked on load, so loading is the test; the margins show they are
+    # not drawn tight around the shipped scenes
+    for n in scenes.builtin_scene_names():
+        d = scenes.scene_to_dict(scenes.builtin_scene(n))
+        assert 1e-9 < d["bead"]["radius_m"] < 10.0
+        assert 0 < d["drive"]["voltage_max_V"] <= 1e4
+
+
+def test_scene_path_that_is_a_folder(tmp_path, capsys):
+    with pytest.raises(SceneError, match="is a folder"):
+        scenes.load_scene(tmp_path)
+    from workflows.cli import main
+
+    assert main(["scene", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("beadrod: error:") and "\n" not in err and str(tmp_path) in err
+    assert "Traceback" not in err
+
+
+def test_scene_file_that_is_not_text(tmp_path):
+    p = tmp_path / "binary.toml"
+    p.write_bytes(b"name = \"\xff\xfe\"\n")
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(p)
+    assert str(exc.value).count(str(p)) == 1

@@ -83,7 +83,7 @@ def test_time_integration_agrees_with_harmonic_balance_on_rod_model():
     s = builtin_scene("paper")
     hb = build_simulator(s)
     ti = build_simulator(s, include={"contact_loss"})
-    assert ti.method == "time-integration" and hb.method == "harmonic-balance"
+    assert ti.method == "time_integration" and hb.method == "harmonic_balance"
     r_hb, r_ti = hb.run([0.1, 1.0]), ti.run([0.1, 1.0])
     np.testing.assert_allclose(r_ti.up_frequency, r_hb.up_frequency, rtol=2e-3)
     np.testing.assert_allclose(r_ti.up_amplitude, r_hb.up_amplitude, rtol=2e-2)

@@ -109,11 +109,11 @@ def _write(path: Path, rows: list[dict], header: str) -> Path:
     """``path``.csv and ``path``.md (``header`` above the table), atomically."""
     import pandas as pd
 
-    from .bench_inference import _markdown
+    from .bench_inference import results_markdown
 
     table = pd.DataFrame(rows)
     write_text(path.with_suffix(".csv"), table.to_csv(index=False))
-    return write_text(path.with_suffix(".md"), f"{header}\n\n{_markdown(table)}\n")
+    return write_text(path.with_suffix(".md"), f"{header}\n\n{results_markdown(table)}\n")
 
 
 def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Path:
@@ -127,7 +127,7 @@ def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Pa
     from inference.likelihood import model_inputs
 
     from .config import DEFAULTS
-    from .pipeline import MODEL_SPECS, load_data
+    from .pipeline import default_model_names, load_data
 
     dev = jax.devices()[0]
     plat = dev.platform
@@ -144,7 +144,7 @@ def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Pa
         names, (chains, warm, draws) = laws or ["hertz"], (2, 30, 30)
     else:
         batches, n_freq, budget = (1, 32, 256, 2048), 26, 120.0
-        names, (chains, warm, draws) = laws or list(MODEL_SPECS), (4, 400, 400)
+        names, (chains, warm, draws) = laws or default_model_names(), (4, 400, 400)
     rows = _simulator_rows(batches, n_freq, budget)
     md = _write(path, rows, header)
     for name in names:

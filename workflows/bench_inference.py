@@ -24,7 +24,7 @@ import numpy as np
 
 from ._io import write_text
 
-__all__ = ["run", "baseline_log_density", "timed_nuts"]
+__all__ = ["run", "baseline_log_density", "timed_nuts", "results_markdown"]
 
 _G = 9.80665
 
@@ -132,7 +132,7 @@ def _run_emcee(d, n_walkers: int, n_steps: int, seed: int):
     return wall, float(np.min(ess)), tau
 
 
-def _markdown(table) -> str:
+def results_markdown(table) -> str:
     from .report import markdown_table
 
     def cell(v: Any) -> str:
@@ -152,9 +152,10 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     from inference.likelihood import model_inputs
     from inference.numpyro_models import ModelSpec, build_model
 
+    from .comparison import JOBS
     from .config import DEFAULTS, merge
     from .parallel import Job, resolve_workers, run_jobs
-    from .pipeline import MODEL_SPECS, comparison_specs, job_order, load_data
+    from .pipeline import comparison_specs, default_model_names, job_order, load_data
 
     out_dir = Path(out_dir)
     chains, warm, draws = (2, 30, 30) if quick else (4, 400, 400)
@@ -163,13 +164,14 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     ds = load_data(cfg)  # the embedded dataset, as compare loads it
     inputs = model_inputs(ds)
     rows = []
-    specs = comparison_specs(list(MODEL_SPECS) if not quick else ["hertz"], "backbone", "normal")
+    specs = comparison_specs(default_model_names() if not quick else ["hertz"], "backbone",
+                             "normal")
     # nested sampling of every model as compare runs it: side by side in worker processes
     ns_jobs = sorted((Job(k, "ns", k, v, cfg) for k, v in specs.items()), key=job_order)
     workers = resolve_workers(cfg["workers"], len(ns_jobs))
     t0 = time.perf_counter()
-    ns_all = run_jobs(ns_jobs, workers=workers, ds=ds, inputs=inputs, resume=False,
-                      log_dir=out_dir, quiet=True, n_devices=chains)
+    ns_all = run_jobs(ns_jobs, runner=JOBS, workers=workers, ds=ds, inputs=inputs,
+                      resume=False, n_devices=chains)
     t_ns_wall = time.perf_counter() - t0
     specs["hertz_first_order"] = ModelSpec(law="hertz", rung="first_order")
     t_bridge = 0.0
@@ -214,7 +216,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
           f"{live} live points, bridge sampling from the NUTS draws; "
           f"emcee {walkers} walkers x {steps} steps (ESS from the integrated autocorrelation "
           "time of the second half). Compile time is a 1+1-iteration run of the same kernel.",
-          "", _markdown(table), "",
+          "", results_markdown(table), "",
           f"NUTS (hertz, first order) ESS/s over the emcee + quad baseline on the same "
           f"posterior: **{ratio:.0f}x** (target >= 100x); log-density agreement spread "
           f"{spread:.2e}. Evidence for all {len(ns_jobs)} models by bridge sampling (the "

@@ -1,20 +1,32 @@
 """The ``beadrod`` command line.
 
 Each subcommand lives in its own ``workflows/cmd_*.py`` module exposing
-``register(subparsers)``; :data:`COMMAND_MODULES` is the one list of them.
-Float64 is switched on here, at the entry point, never on import of ``models``.
+``register(subparsers)``; :data:`COMMAND_MODULES` is the one list of them. Building the
+parser imports neither JAX nor the models (``beadrod --help`` answers at once); float64,
+the warnings and the logging are set up here, at the entry point (workflows.runtime),
+never on import of ``models``.
+
+Exit status: 0 done, 1 a fit failed its gate (compare, fit), 2 an error the user can fix
+(printed as one line and written to the run's log), 130 interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import sys
+import traceback
 
-__all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES"]
+from . import runtime
+from .runtime import UserError, host_devices
+
+__all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES", "UserError",
+           "version_string"]
 
 COMMAND_MODULES: tuple[str, ...] = (
     "workflows.cmd_compare",
+    "workflows.cmd_laws",
     "workflows.cmd_rungs",
     "workflows.cmd_scene",
     "workflows.cmd_shift",
@@ -26,33 +38,13 @@ COMMAND_MODULES: tuple[str, ...] = (
 )
 
 
-def host_devices(n: int) -> None:
-    """Ask XLA for ``n`` host (CPU) devices so NUTS chains run in parallel.
+def version_string() -> str:
+    from importlib.metadata import PackageNotFoundError, version
 
-    Must run before anything initialises the JAX backend (importing ``inference``
-    does, through its module-level distributions), so it sets the flag itself
-    rather than importing numpyro. A count already in XLA_FLAGS is left alone.
-    """
-    import os
-
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "xla_force_host_platform_device_count" not in flags:
-        os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={int(n)}"
-
-
-def _enable_x64() -> None:
-    import jax
-
-    jax.config.update("jax_enable_x64", True)
-    # persistent compilation cache: a second run skips most XLA compilation (the first
-    # run on a machine pays it in full). BEADROD_JAX_CACHE="" switches it off.
-    import os
-
-    cache = os.environ.get("BEADROD_JAX_CACHE",
-                           os.path.join(os.path.expanduser("~"), ".cache", "beadrod", "jax"))
-    if cache:
-        jax.config.update("jax_compilation_cache_dir", cache)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+    try:
+        return f"beadrod {version('beadrod')}"
+    except PackageNotFoundError:  # running from a source tree
+        return "beadrod (version unknown: not installed)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -60,39 +52,46 @@ def build_parser() -> argparse.ArgumentParser:
         prog="beadrod",
         description="Bayesian model comparison and parameter inference for a bead resting "
         "on a rod: contact laws, their resonance-frequency shift, and the data.",
+        epilog="beadrod COMMAND --help describes a command and its defaults.",
     )
+    parser.add_argument("--version", action="version", version=version_string())
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    _enable_x64()
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("beadrod: interrupted", file=sys.stderr)
-        return 130
-    except _user_errors() as exc:
-        print(f"beadrod: error: {exc}", file=sys.stderr)
-        return 2
-
-
-class UserError(Exception):
-    """An error the user can act on (bad data, bad config, refused overwrite)."""
-
-
 def _user_errors() -> tuple[type[BaseException], ...]:
     """Errors printed as one actionable line (they name the file, row, column or key)."""
     from data.schema import DataError
+    from models.law import RungUnavailable
+    from models.lawfile import LawFileError
     from models.scenes import SceneError
 
     from .config import ConfigError
 
-    return (UserError, DataError, SceneError, ConfigError)
+    return (UserError, DataError, SceneError, ConfigError, LawFileError, RungUnavailable)
+
+
+def main(argv: list[str] | None = None) -> int:
+    runtime.quiet_libraries()
+    runtime.setup_logging(None, quiet=False)  # console only, until a command opens its log
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    runtime.enable_x64()
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("beadrod: interrupted", file=sys.stderr)
+        runtime.log_to_file(logging.ERROR, "interrupted")
+        return 130
+    except Exception as exc:
+        if not isinstance(exc, _user_errors()):  # a bug: the traceback, here and in the log
+            runtime.log_to_file(logging.ERROR, "unexpected error\n" + traceback.format_exc())
+            raise
+        print(f"beadrod: error: {exc}", file=sys.stderr)
+        runtime.log_to_file(logging.ERROR, f"error: {exc}")
+        return 2
 
 
 if __name__ == "__main__":

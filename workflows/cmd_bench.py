@@ -10,7 +10,7 @@ import argparse
 import importlib
 from pathlib import Path
 
-__all__ = ["register", "BENCHES"]
+__all__ = ["register", "BENCHES", "BENCH_EXTRAS"]
 
 BENCHES: dict[str, str] = {
     "physics": "workflows.bench_physics",
@@ -20,9 +20,32 @@ BENCHES: dict[str, str] = {
 }
 
 
-def _run(args: argparse.Namespace) -> int:
-    from .cli import host_devices
+# what a benchmark needs beyond the main install (the "bench" extra of pyproject.toml)
+BENCH_EXTRAS: dict[str, tuple[str, ...]] = {"physics": ("mpmath",), "inference": ("emcee",)}
 
+
+def _missing_extra(which: str) -> str | None:
+    import importlib.util
+
+    return next((m for m in BENCH_EXTRAS.get(which, ()) if importlib.util.find_spec(m) is None),
+                None)
+
+
+def _extra_error(which: str, module: str) -> Exception:
+    from .runtime import UserError
+
+    return UserError(f"beadrod bench {which} needs {module}, which the main install leaves "
+                     "out: pip install -e \".[bench]\"")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .runtime import UserError, host_devices
+
+    if args.laws and args.which != "device":
+        raise UserError("--laws applies to 'beadrod bench device' only")
+    missing = _missing_extra(args.which)
+    if missing:
+        raise _extra_error(args.which, missing)
     host_devices(4)  # parallel chains: must precede anything that starts the JAX backend
     import jax
 
@@ -31,15 +54,17 @@ def _run(args: argparse.Namespace) -> int:
     from inference.sample import configure
 
     configure(4)
-    module = importlib.import_module(BENCHES[args.which])
     kw = {}
     if args.laws:
-        if args.which != "device":
-            from .cli import UserError
-
-            raise UserError("--laws applies to 'beadrod bench device' only")
         kw["laws"] = [w.strip() for w in args.laws.split(",") if w.strip()]
-    md = module.run(Path(args.out), quick=args.quick, **kw)
+    try:
+        module = importlib.import_module(BENCHES[args.which])
+        md = module.run(Path(args.out), quick=args.quick, **kw)
+    except ModuleNotFoundError as exc:  # an extra imported deeper down
+        extras = {m for ms in BENCH_EXTRAS.values() for m in ms}
+        if exc.name not in extras:
+            raise
+        raise _extra_error(args.which, exc.name) from None
     if not args.quiet:
         print(Path(md).read_text())
         print(f"written: {md}")

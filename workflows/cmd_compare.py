@@ -1,76 +1,108 @@
-"""``beadrod compare`` (every law) and ``beadrod fit --law LAW`` (one law)."""
+"""``beadrod compare`` (every law) and ``beadrod fit --law LAW`` (one law).
+
+Exit status: 0 when every fit passed its gate, 1 when one did not (``--allow-failed``: 0;
+the failure is marked in every table either way), 2 for an error the user can fix.
+"""
 
 from __future__ import annotations
 
 import argparse
 import logging
-import sys
 from pathlib import Path
 from typing import Any
 
-__all__ = ["register", "setup_logging"]
+from . import lawfiles
+from .config import DEFAULTS, RUNGS, describe, leaf_keys
+from .outdir import check_out
+
+__all__ = ["register", "add_sampling_args", "flags", "FLAG_KEYS", "config_only_keys",
+           "failed_fits", "check_laws", "EXIT_FAILED"]
+
+EXIT_FAILED = 1
+
+# flag (argparse dest) -> the config key it sets; --help-config lists the other keys
+FLAG_KEYS: dict[str, str] = {
+    "data": "data", "out": "out", "seed": "seed", "rung": "rung", "workers": "workers",
+    "quiet": "quiet", "laws": "laws", "law": "laws",
+    "chains": "sampling.chains", "warmup": "sampling.warmup", "samples": "sampling.samples",
+    "live_points": "evidence.live_points", "smc_particles": "evidence.smc_particles",
+    "smc_seeds": "evidence.smc_seeds", "evidence": "evidence.methods",
+    "robust": "likelihood.robust", "no_two_percent_rule": "likelihood.two_percent_rule",
+    "law_files": "law_files",
+}
+
+# store_true flags: what they set when given (absent: unset, the file or default decides)
+_SWITCHES: dict[str, bool] = {"quiet": True, "robust": True, "no_two_percent_rule": False}
 
 
-def setup_logging(out: Path, quiet: bool) -> None:
-    """Progress on stderr (unless quiet) and a full log in OUT/beadrod.log."""
-    logger = logging.getLogger("beadrod")
-    logger.setLevel(logging.INFO)
-    for h in list(logger.handlers):
-        logger.removeHandler(h)
-    out.mkdir(parents=True, exist_ok=True)
-    fh = logging.FileHandler(out / "beadrod.log")
-    fh.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
-    logger.addHandler(fh)
-    sh = logging.StreamHandler(sys.stderr)
-    sh.setFormatter(logging.Formatter("beadrod: %(message)s"))
-    sh.setLevel(logging.WARNING if quiet else logging.INFO)
-    logger.addHandler(sh)
-    logger.propagate = False
+def config_only_keys() -> list[str]:
+    """The config keys no flag sets (in DEFAULTS order)."""
+    covered = set(FLAG_KEYS.values())
+    return [k for k in leaf_keys() if k not in covered]
 
 
-def _flags(args: argparse.Namespace) -> dict[str, Any]:
-    sampling = {"chains": args.chains, "warmup": args.warmup, "samples": args.samples}
-    evidence = {"live_points": args.live_points, "smc_particles": args.smc_particles,
-                "smc_seeds": args.smc_seeds,
-                "methods": None if args.evidence is None else args.evidence.split(",")}
-    likelihood = {"robust": True if args.robust else None,
-                  "two_percent_rule": False if args.no_two_percent_rule else None}
-    return {"data": args.data, "out": args.out, "seed": args.seed, "rung": args.rung,
-            "workers": args.workers,
-            "quiet": True if args.quiet else None,
-            "laws": _laws(args),
-            "sampling": sampling, "evidence": evidence, "likelihood": likelihood}
+def _value(dest: str, raw: Any) -> Any:
+    if raw is None or raw is False:
+        return None
+    if dest in _SWITCHES:
+        return _SWITCHES[dest]
+    if dest == "law":
+        return [raw]
+    if dest == "law_files":  # absolute paths: workers and --resume see the same files
+        return [str(Path(f).resolve()) for f in raw] or None
+    if dest in ("laws", "evidence"):
+        return [s.strip() for s in raw.split(",") if s.strip()]
+    return raw
 
 
-def _laws(args: argparse.Namespace) -> list[str] | None:
-    if getattr(args, "law", None):
-        return [args.law]
-    if getattr(args, "laws", None):
-        return [s.strip() for s in args.laws.split(",") if s.strip()]
-    return None
+def flags(args: argparse.Namespace) -> dict[str, Any]:
+    """The nested config dict the command-line flags set (None: not given)."""
+    out: dict[str, Any] = {}
+    for dest, key in FLAG_KEYS.items():
+        val = _value(dest, getattr(args, dest, None))
+        if val is None:
+            continue
+        head, _, leaf = key.rpartition(".")
+        (out.setdefault(head, {}) if head else out)[leaf] = val
+    return out
 
 
-def _check_out(out: Path, force: bool, resume: bool) -> None:
-    from .cli import UserError
+def failed_fits(result: dict[str, Any]) -> list[tuple[str, str]]:
+    """(fit, first reason) of every fit that failed its gate: the laws, then the tension's
+    extra fits (the paper's Eq. 25 pair)."""
+    bad = [(r["name"], (r.get("failures") or ["failed"])[0]) for r in result["laws"]
+           if r["status"] != "ok"]
+    paper = ((result.get("tension") or {}).get("paper") or {})
+    bad += [(f"tension:{k}_paper_eq25", "failed its gate")
+            for k, ok in (paper.get("fits_ok") or {}).items() if not ok]
+    return bad
 
-    if out.exists() and any(out.iterdir()) and not (force or resume):
-        raise UserError(f"output folder {out} exists and is not empty: pass --force to "
-                        "overwrite it or --resume to reuse finished laws")
+
+def check_laws(cfg: dict[str, Any]) -> None:
+    """Law names of ``cfg`` against the registry (before any data are loaded). Imports the
+    models: call after the host device count is set."""
+    from .config import normalise_laws
+    from .pipeline import model_names
+
+    cfg["laws"] = normalise_laws(cfg["laws"], model_names())
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .cli import host_devices
+    from . import runtime
+    from .comparison import n_devices
     from .config import resolve
 
-    cfg = resolve(args.config, _flags(args))
-    host_devices(max(1, min(int(cfg["sampling"]["chains"]), 8)))  # before JAX starts
+    cfg = resolve(args.config, flags(args))
+    out = Path(cfg["out"])
+    check_out(out, force=args.force, resume=args.resume)
+    runtime.setup_logging(out, cfg["quiet"])
+    runtime.host_devices(n_devices(cfg))  # before JAX starts
     from inference.sample import configure
 
-    configure(max(1, min(int(cfg["sampling"]["chains"]), 8)))
-    out = Path(cfg["out"])
-    _check_out(out, args.force, args.resume)
-    setup_logging(out, cfg["quiet"])
-    from .pipeline import run_compare
+    configure(n_devices(cfg))
+    lawfiles.load(cfg["law_files"])
+    check_laws(cfg)
+    from .comparison import run_compare
 
     result = run_compare(cfg, out, resume=args.resume)
     log = logging.getLogger("beadrod")
@@ -78,67 +110,104 @@ def _run(args: argparse.Namespace) -> int:
     log.info("report: %s", out / "report.html")
     if not cfg["quiet"]:
         print((out / "comparison.md").read_text())
-    failed = [r["name"] for r in result["laws"] if r["status"] != "ok"]
-    if failed:
-        log.warning("FAILED diagnostics: %s (marked in every table)", ", ".join(failed))
-    return 0
+    bad = failed_fits(result)
+    if not bad:
+        return 0
+    what = "; ".join(f"{name}: {why}" for name, why in bad)
+    if args.allow_failed:
+        log.warning("FAILED their gate (marked in every table; --allow-failed): %s", what)
+        return 0
+    log.error("%d fit(s) FAILED their gate (marked in every table): %s; exit status %d "
+              "(--allow-failed: 0)", len(bad), what, EXIT_FAILED)
+    return EXIT_FAILED
 
 
 def add_sampling_args(p: argparse.ArgumentParser) -> None:
     """--seed, --chains, --workers, --warmup, --samples (compare, fit, rungs)."""
-    p.add_argument("--seed", type=int, help="random seed (same seed, same numbers)")
-    p.add_argument("--chains", type=int, help="NUTS chains (default 4)")
+    s = DEFAULTS["sampling"]
+    p.add_argument("--seed", type=int, help="random seed: same seed, same numbers "
+                   f"(default: {DEFAULTS['seed']})")
+    p.add_argument("--chains", type=int, help=f"NUTS chains (default: {s['chains']})")
     p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
-                   "processes (default 0: one per two usable cores, at most 4; 1: no worker "
+                   "processes (default: 0, one per two usable cores, at most 4; 1: no worker "
                    "processes); the results do not depend on it")
-    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain")
-    p.add_argument("--samples", type=int, help="NUTS draws per chain")
+    p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain, >= 20 "
+                   f"(default: {s['warmup']})")
+    p.add_argument("--samples", type=int, help="NUTS draws per chain, >= 20 "
+                   f"(default: {s['samples']})")
+
+
+class _HelpConfig(argparse.Action):
+    """--help-config: the options only a config file sets, with defaults and meaning."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):  # noqa: A002 - argparse's own keyword
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print("Options set only in a config file (--config FILE.toml; the other options "
+              "have flags, see --help), with their defaults:\n")
+        print(describe(config_only_keys()))
+        parser.exit(0)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    from .rungs import RUNGS
-
+    ev = DEFAULTS["evidence"]
     p.add_argument("--data", help="dataset folder (measurements.csv + scene.toml); "
                    "default: the embedded synthetic 'paper_like' dataset")
-    p.add_argument("--config", help="TOML file setting any option below (flags win)")
-    p.add_argument("--out", help="output folder (default: beadrod-out)")
+    p.add_argument("--config", help="TOML file setting any option below and those of "
+                   "--help-config (flags win)")
+    p.add_argument("--help-config", action=_HelpConfig,
+                   help="list the options only a config file sets, with their defaults")
+    p.add_argument("--out", help=f"output folder (default: {DEFAULTS['out']})")
     p.add_argument("--rung", choices=RUNGS,
-                   help="forward model: exact backbone (default), the paper's first order, "
-                   "or the paper's Eq. 25 for the viscoelastic law")
+                   help="forward model: exact backbone, the paper's first order, or the "
+                   f"paper's Eq. 25 for the viscoelastic law (default: {DEFAULTS['rung']})")
     add_sampling_args(p)
-    p.add_argument("--live-points", type=int, help="nested-sampling live points")
-    p.add_argument("--smc-particles", type=int, help="tempered-SMC particles")
+    p.add_argument("--live-points", type=int, help="nested-sampling live points "
+                   f"(default: {ev['live_points']})")
+    p.add_argument("--smc-particles", type=int, help="tempered-SMC particles "
+                   f"(default: {ev['smc_particles']})")
     p.add_argument("--smc-seeds", type=int, help="independent SMC runs (their spread is the "
-                   "error bar)")
+                   f"error bar; default: {ev['smc_seeds']})")
     p.add_argument("--evidence", help="comma-separated evidence estimators among ns (nested "
                    "sampling), bridge (bridge sampling from the NUTS draws) and smc "
-                   "(tempered SMC); the first is the one the table ranks by; default bridge "
-                   "(add ,ns for the nested-sampling cross-check: ~3 min more on 2 cores)")
+                   "(tempered SMC); the first is the one the table ranks by (default: "
+                   f"{','.join(ev['methods'])}; add ,ns for the nested-sampling cross-check: "
+                   "~3 min more on 2 cores)")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
     p.add_argument("--no-two-percent-rule", action="store_true",
                    help="keep drive steps after the linear resonance drifted by > 2 %%")
-    p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder")
+    p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder "
+                   "(the outputs of the earlier run are removed first)")
     p.add_argument("--resume", action="store_true", help="reuse laws already finished in the "
-                   "output folder whose inputs (data hash, config, version) are unchanged")
+                   "output folder whose inputs (model, data, config, version) are unchanged")
+    p.add_argument("--allow-failed", action="store_true", help="exit status 0 even when a "
+                   f"fit fails its gate (default: {EXIT_FAILED}; failures are marked in every "
+                   "table either way)")
     p.add_argument("--quiet", action="store_true", help="no progress output (log file only)")
+    lawfiles.add_argument(p)
 
 
 def register(sub) -> None:
+    # no law registry here: it imports JAX, and building the parser must not
+    epilog = (f"exit status: 0 all fits passed their gate, {EXIT_FAILED} a fit failed it "
+              "(see --allow-failed), 2 an error to fix (the message names it)")
     p = sub.add_parser("compare", help="fit every contact law, compare them, write the report",
                        description="The main job: fit every law by NUTS, check diagnostics, "
                        "compute LOO and the evidence (bridge sampling; --evidence bridge,ns adds a "
                        "nested-sampling cross-check), quantify the "
-                       "Q-versus-shift tension, and write tables, figures and a report.")
-    from .pipeline import MODEL_SPECS
-
-    p.add_argument("--laws", help="comma-separated subset of laws to fit (default: all of "
-                   f"{', '.join(MODEL_SPECS)})")
+                       "Q-versus-shift tension, and write tables, figures and a report.",
+                       epilog=epilog)
+    p.add_argument("--laws", help="comma-separated subset of laws to fit, e.g. hertz,jkr "
+                   "(default: every law and the law-free baseline; a wrong name lists them)")
     _common(p)
     p.set_defaults(func=_run)
 
     f = sub.add_parser("fit", help="fit one contact law (same outputs for that law)",
                        description="Fit one law: NUTS, diagnostics, LOO, evidence, figures "
-                       "and a report for that law alone.")
-    f.add_argument("--law", required=True, choices=list(MODEL_SPECS), help="which law")
+                       "and a report for that law alone.", epilog=epilog)
+    f.add_argument("--law", required=True, help="which law, e.g. hertz (a wrong name lists "
+                   "them)")
     _common(f)
     f.set_defaults(func=_run)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
-__all__ = ["register"]
+__all__ = ["register", "check_amplitude", "check_tolerance"]
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -50,18 +51,42 @@ def _text(plan) -> str:
     return "\n".join(lines)
 
 
+def check_amplitude(value: float | None, radius: float) -> float | None:
+    """--amplitude-max [m]: None (estimate it), else finite, > 0 and below the bead radius
+    ``radius`` [m] (a contact displacement larger than the bead itself is no contact)."""
+    if value is None:
+        return None
+    v = float(value)
+    if not math.isfinite(v) or v <= 0:
+        raise ValueError(f"--amplitude-max {value:g}: the largest first-harmonic amplitude "
+                         "delta_a is a displacement in metres, finite and > 0")
+    if v >= radius:
+        raise ValueError(f"--amplitude-max {v:g} m is not below the bead radius {radius:g} m: "
+                         "no contact law describes a displacement that large")
+    return v
+
+
+def check_tolerance(value: float | None, default: float) -> float:
+    """--tolerance: an acceptable error in Delta f/f0, finite with 0 < T < 1."""
+    tol = default if value is None else float(value)
+    if not (math.isfinite(tol) and 0 < tol < 1):
+        raise ValueError(f"--tolerance {tol:g}: an acceptable error in Delta f/f0 lies "
+                         "strictly between 0 and 1 (default 5e-3)")
+    return tol
+
+
 def run(args: argparse.Namespace) -> int:
     from models.plan import DEFAULT_TOLERANCE, plan_scene
     from models.scenes import SceneError
-    from workflows.cli import UserError
-    from workflows.cmd_scene import resolve_scene
+
+    from .cmd_scene import resolve_scene
+    from .runtime import UserError
 
     try:
         scene, _ = resolve_scene(args.scene, args.builtin)
-        tol = DEFAULT_TOLERANCE if args.tolerance is None else args.tolerance
-        if not tol > 0:
-            raise ValueError(f"--tolerance must be > 0, got {tol}")
-        plan = plan_scene(scene, amplitude_max=args.amplitude_max, tolerance=tol)
+        tol = check_tolerance(args.tolerance, DEFAULT_TOLERANCE)
+        amp = check_amplitude(args.amplitude_max, float(scene.radius))
+        plan = plan_scene(scene, amplitude_max=amp, tolerance=tol)
     except (SceneError, ValueError) as exc:
         raise UserError(str(exc)) from None
     if args.json:

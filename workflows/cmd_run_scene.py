@@ -76,8 +76,8 @@ def run(args: argparse.Namespace) -> int:
     from models.scenes import SceneError
     from models.simulate import PlasticityError, build_simulator
     from workflows._io import write_json
-    from workflows.cli import UserError
     from workflows.cmd_scene import resolve_scene
+    from workflows.runtime import UserError
 
     try:
         scene, _ = resolve_scene(args.scene, args.builtin)

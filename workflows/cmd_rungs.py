@@ -11,44 +11,54 @@ __all__ = ["register"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .cli import UserError, host_devices
-    from .cmd_compare import _check_out, _flags, setup_logging
+    from . import runtime
+    from .cmd_compare import EXIT_FAILED, check_laws, flags
+    from .comparison import n_devices
     from .config import DEFAULTS, resolve
+    from .outdir import check_out
     from .rungs import check_rungs
 
     rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
     try:
         check_rungs(rungs)
     except ValueError as exc:
-        raise UserError(f"--rungs: {exc}") from None
-    cfg = resolve(args.config, _flags(args))
+        raise runtime.UserError(f"--rungs: {exc}") from None
+    cfg = resolve(args.config, flags(args))
     if cfg["out"] == DEFAULTS["out"]:  # set neither by flag nor by the config file
         cfg["out"] = "beadrod-rungs"
-    n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
-    host_devices(n_dev)  # before JAX starts
+    out = Path(cfg["out"])
+    check_out(out, force=args.force, resume=False)
+    runtime.setup_logging(out, cfg["quiet"])
+    runtime.host_devices(n_devices(cfg))  # before JAX starts
     from inference.sample import configure
 
-    configure(n_dev)
-    out = Path(cfg["out"])
-    _check_out(out, args.force, False)
-    setup_logging(out, cfg["quiet"])
+    configure(n_devices(cfg))
+    from . import lawfiles
+
+    lawfiles.load(cfg["law_files"])
+    check_laws(cfg)
     from ._io import write_text
     from .config import to_toml
     from .rungs import run_rungs
 
     write_text(out / "config.resolved.toml", to_toml(cfg))
-
-    run_rungs(cfg, out, rungs)
-    logging.getLogger("beadrod").info("written: %s", out / "rungs.md")
+    result = run_rungs(cfg, out, rungs)
+    log = logging.getLogger("beadrod")
+    log.info("written: %s", out / "rungs.md")
     if not cfg["quiet"]:
         print((out / "rungs.md").read_text())
+    bad = sorted({f"{r['law']} ({r['rung']})" for r in result["evidence"]
+                  if r["status"] != "ok"})
+    if bad and not args.allow_failed:
+        log.error("fits FAILED their gate: %s (marked FAILED in rungs.md); exit status %d "
+                  "(--allow-failed: 0)", ", ".join(bad), EXIT_FAILED)
+        return EXIT_FAILED
     return 0
 
 
 def register(sub) -> None:
     from .cmd_compare import add_sampling_args
-    from .pipeline import MODEL_SPECS
-    from .rungs import RUNGS
+    from .config import RUNGS
 
     p = sub.add_parser(
         "rungs", help="how much the forward-model rung moves each posterior and evidence",
@@ -60,15 +70,19 @@ def register(sub) -> None:
     p.add_argument("--rungs", default="first_order,backbone",
                    help=f"comma-separated rungs among {', '.join(RUNGS)}; the first is the "
                    "reference (default: %(default)s)")
-    p.add_argument("--laws", help=f"comma-separated laws among {', '.join(MODEL_SPECS)} "
-                   "(default: all but the baseline, which has no rung)")
+    p.add_argument("--laws", help="comma-separated laws, e.g. hertz,jkr (default: every law "
+                   "but the baseline, which has no rung; a wrong name lists them)")
     p.add_argument("--data", help="dataset folder (default: the embedded paper_like world)")
     p.add_argument("--config", help="TOML file setting any option (flags win)")
     p.add_argument("--out", help="output folder (default: beadrod-rungs)")
     add_sampling_args(p)
-    p.add_argument("--evidence", help="evidence estimators, as for compare (default bridge)")
+    p.add_argument("--evidence", help="evidence estimators, as for compare (default: bridge)")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
     p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder")
+    p.add_argument("--allow-failed", action="store_true",
+                   help="exit status 0 even when a fit fails its gate (default: 1)")
+    from . import lawfiles
+
+    lawfiles.add_argument(p)
     p.add_argument("--quiet", action="store_true", help="no progress output (log file only)")
-    p.set_defaults(func=_run, live_points=None, smc_particles=None, smc_seeds=None,
-                   no_two_percent_rule=False, law=None, rung=None)
+    p.set_defaults(func=_run)

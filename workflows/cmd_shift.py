@@ -1,62 +1,242 @@
-"""``beadrod shift``: the predicted Delta f/f0 of a contact law at given amplitudes."""
+"""``beadrod shift``: the predicted Delta f/f0 of a contact law at given amplitudes.
+
+Every number printed is inside the domain where it means something, or refused with the
+reason (exit status 2):
+
+* x = delta_a/delta0 must be finite and 0 <= x <= X_MAX = 2. Past contact loss (x = 1 for
+  Hertz) the bead flies free for part of the cycle; the first-order average of the
+  tangent stiffness then no longer describes the motion, and far beyond it (x = 10 it
+  predicts a stiffening, where the exact backbone softens) it means nothing. The laws'
+  fast backbone paths are tabulated on the same range (models.backbone_table).
+* the power-law exponent must satisfy 1 < n <= 3 (the range of the law: n = 1 is a
+  linear spring, no shift; past 3 no rough-contact model, and no table, applies);
+* law parameters must be finite and physical: Young's modulus, viscosities and surface
+  energies within the physical bounds of a scene (models.scenes.BOUNDS).
+
+The parameter checks are small functions (:func:`check_x`, :func:`check_param`) so that
+any way of passing a parameter goes through the same check.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+from collections.abc import Sequence
+from typing import Any
 
-import numpy as np
+from models.rungs import FIT_RUNGS
 
-__all__ = ["register", "shift_table"]
+from . import lawfiles
+
+__all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
+           "METHODS", "PARAM_DOMAINS"]
+
+X_MAX = 2.0
+"""Largest x = delta_a/delta0 computed (models.backbone_table.X_MAX: the tables end there)."""
+
+# --method takes the rungs a law computes its shift at (models.rungs.FIT_RUNGS), spelled
+# as everywhere else
+METHODS = FIT_RUNGS
+
+# law parameter -> (what it is, unit, (low, high, low excluded) or the models.scenes.BOUNDS
+# key that gives the physical range)
+PARAM_DOMAINS: dict[str, tuple[str, str, tuple[float, float, bool] | str]] = {
+    "n": ("the power-law exponent", "-", (1.0, 3.0, True)),
+    "young": ("Young's modulus", "Pa", "young_Pa"),
+    "eta": ("the viscosity", "Pa s", "viscosity_Pa_s"),
+    "eta_shift": ("the viscosity of the shift", "Pa s", "viscosity_Pa_s"),
+    "eta_q": ("the viscosity of Q", "Pa s", "viscosity_Pa_s"),
+    "gamma": ("the surface energy", "J/m^2", "surface_energy_J_m2"),
+}
+
+# the former law name of the paper's Eq. 25, kept as a spelling of (viscoelastic, paper_eq25)
+_ALIASES = {"viscoelastic_paper_eq25": ("viscoelastic", "paper_eq25")}
 
 
-def shift_table(law: str, x: list[float], *, method: str, n: float | None, scene_path: str | None,
-                builtin: str, young: float | None, eta: float | None) -> dict:
-    """Delta f/f0 at each x for ``law`` with the scene's parameters (SI units in keys)."""
-    from models import hertz, viscoelastic
-    from models.registry import get_law
-    from models.scenes import builtin_scene, load_scene
+def _fmt(v: float) -> str:
+    return f"{float(v):g}"
 
-    scene = load_scene(scene_path) if scene_path else builtin_scene(builtin)
-    if young is not None:
-        scene = scene.with_young(young)
-    contact = get_law(law)
-    p = {"e_star": scene.e_star, "radius": scene.radius, "load": scene.load,
-         "mass": scene.mass, "gamma": scene.surface_energy, "n": n}
-    if law == "powerlaw" and n is None:
-        raise ValueError("law 'powerlaw' needs --n (the exponent, 1 < n <= 3)")
-    eta = eta if eta is not None else scene.viscosity
-    omega0 = 2 * np.pi * float(hertz.linear_frequency(scene.load, scene.mass, e_star=scene.e_star,
-                                                      radius=scene.radius))
-    if eta is not None:
-        mat = scene.bead_material
-        p["damping_constant"] = float(viscoelastic.damping_constant(
-            eta1=eta, eta2=eta, young=mat.young, poisson=mat.poisson))
-        p["omega"] = omega0
-    values = np.asarray(contact.shift(np.asarray(x, float), method=method, **p))
-    out = {"law": law, "method": method, "scene": scene.name, "x": list(map(float, x)),
-           "delta_f_over_f0": values.tolist()}
-    if n is not None:
-        out["n"] = n
-    if "damping_constant" in p and law.startswith("viscoelastic"):
-        out["eta_Pa_s"] = eta
-        out["damping_constant_s"] = p["damping_constant"]
+
+def check_x(xs: Sequence[float]) -> list[float]:
+    """The amplitudes as floats, each finite with 0 <= x <= X_MAX; ValueError otherwise."""
+    out = []
+    for x in xs:
+        x = float(x)
+        if not math.isfinite(x):
+            raise ValueError(f"--x {x}: an amplitude must be a finite number")
+        if x < 0:
+            raise ValueError(f"--x {_fmt(x)}: x = delta_a/delta0 is an amplitude ratio, >= 0")
+        if x > X_MAX:
+            raise ValueError(
+                f"--x {_fmt(x)}: x must be <= {X_MAX:g}. Past contact loss (x = 1 for Hertz) "
+                "the bead flies free for part of each cycle and the first-order average of "
+                "the stiffness stops describing the motion (far past it, it even predicts a "
+                "stiffening where the exact backbone softens): use --method backbone there; "
+                f"its tables, like this command, end at x = {X_MAX:g}")
+        out.append(x)
     return out
 
 
+def check_param(name: str, value: float) -> float:
+    """``value`` of law parameter ``name`` as a float inside its physical domain."""
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name} = {value}: must be a finite number")
+    if name not in PARAM_DOMAINS:
+        return v
+    what, unit, rng = PARAM_DOMAINS[name]
+    if isinstance(rng, str):
+        from models.scenes import BOUNDS
+
+        lo, hi, why = BOUNDS[rng]
+        open_lo = False
+    else:
+        (lo, hi, open_lo), why = rng, ""
+    if not ((lo < v if open_lo else lo <= v) and v <= hi):
+        unit = "" if unit == "-" else f" {unit}"
+        raise ValueError(f"{name} = {_fmt(v)}: {what} must lie in {'(' if open_lo else '['}"
+                         f"{_fmt(lo)}, {_fmt(hi)}]{unit}" + (f" ({why})" if why else ""))
+    return v
+
+
+def check_method(law: Any, method: str) -> str:
+    """The law's rung for ``method``; ValueError if the law has no such rung."""
+    from models.rungs import check_rung
+
+    rung = check_rung(method, fit=True)
+    if rung not in law.rungs:
+        raise ValueError(f"law '{law.name}' has no {method} rung; its rungs: "
+                         f"{', '.join(law.rungs)}")
+    return rung
+
+
+def _scene_keywords(scene: Any) -> dict[str, float]:
+    from inference.likelihood import scene_quantities
+
+    out = scene_quantities(scene)
+    if scene.viscosity is not None:
+        out["viscosity"] = float(scene.viscosity)
+    return out
+
+
+def _theta(law: Any, sc: dict[str, float], given: dict[str, float]
+           ) -> tuple[dict[str, float], dict[str, str]]:
+    """The law's parameters and where each comes from: given, else the scene's value
+    (its ``scene_key``), else the prior median."""
+    from models.law import prior_median
+
+    theta, source = {}, {}
+    for p in law.params:
+        if p.name in given:
+            theta[p.name], source[p.name] = given[p.name], "given"
+        elif (p.scene_key or p.name) in sc:  # its scene quantity, or one of its own name
+            key = p.scene_key or p.name
+            theta[p.name], source[p.name] = sc[key], f"scene ({key})"
+        else:
+            theta[p.name], source[p.name] = prior_median(p.prior), "prior median"
+    return {k: check_param(k, v) for k, v in theta.items()}, source
+
+
+def parse_params(items: Sequence[str] | None) -> dict[str, float]:
+    """``KEY=VALUE`` strings as a dict of floats; ValueError naming a malformed item."""
+    out: dict[str, float] = {}
+    for item in items or []:
+        key, sep, val = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise ValueError(f"--param {item!r}: write KEY=VALUE, e.g. --param young=2e11")
+        try:
+            out[key] = float(val)
+        except ValueError:
+            raise ValueError(f"--param {item!r}: {val!r} is not a number") from None
+    return out
+
+
+def shift_table(law: str, x: list[float], *, method: str, n: float | None,
+                scene_path: str | None, builtin: str, young: float | None,
+                eta: float | None, params: dict[str, float] | None = None,
+                law_files: list[str] | None = None) -> dict:
+    """Delta f/f0 at each x for ``law`` (SI units in keys).
+
+    ``n``, ``young`` and ``eta`` are shorthand flags; ``params`` any law parameter or scene
+    quantity by name (``beadrod laws`` lists them). A law parameter not given takes the
+    scene's value where the scene has one, else its prior median; ``sources`` says which.
+    Every value is checked (:func:`check_x`, :func:`check_param`)."""
+    import numpy as np
+
+    from models.law import SCENE_KEYS
+    from models.registry import get_law
+    from models.scenes import builtin_scene, load_scene
+
+    from . import lawfiles
+
+    scene = load_scene(scene_path) if scene_path else builtin_scene(builtin)
+    lawfiles.load(law_files or [], scene)
+    if law in _ALIASES:
+        law, method = _ALIASES[law]
+    xs = check_x(x)
+    given = {k: check_param(k, v) for k, v in (params or {}).items()}
+    for k, v in (("n", n), ("young", young), ("eta", eta)):
+        if v is not None:
+            given[k] = check_param(k, v)
+    contact = get_law(law)
+    if "eta" in given and "eta" not in contact.param_names:
+        for k in ("eta_shift", "eta_q"):  # --eta sets both viscosities of the split law
+            if k in contact.param_names:
+                given.setdefault(k, given["eta"])
+        given.pop("eta", None)
+    unknown = [k for k in given if k not in contact.param_names and k not in SCENE_KEYS]
+    if unknown:
+        raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
+                         f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
+    rung = check_method(contact, method)
+    sc = _scene_keywords(scene)
+    sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
+    theta, sources = _theta(contact, sc, {k: v for k, v in given.items()
+                                          if k in contact.param_names})
+    kw = contact.resolve(sc, theta)
+    d0 = contact.overlap(**kw)
+    k0 = float(jax_stiffness(contact, d0, kw))
+    kw["omega0"] = float(np.sqrt(k0 / kw["mass"]))
+    values = np.asarray(contact.shift(np.asarray(xs, float), rung=rung, delta0=d0, **kw),
+                        float)
+    bad = [xv for xv, v in zip(xs, np.atleast_1d(values)) if not np.isfinite(v)]
+    if bad:  # a defect, not an input error: say where instead of printing NaN
+        raise ValueError(f"law '{law}' ({rung}) gives no finite shift at x = "
+                         f"{', '.join(map(_fmt, bad))}")
+    out = {"law": law, "method": rung, "rung": rung, "scene": scene.name, "x": xs,
+           "delta_f_over_f0": [float(v) for v in np.atleast_1d(values)],
+           "params": {k: float(v) for k, v in theta.items()}, "sources": sources,
+           "delta0_m": float(d0), "f0_Hz": kw["omega0"] / (2 * np.pi)}
+    if "n" in theta:
+        out["n"] = theta["n"]
+    return out
+
+
+def jax_stiffness(law: Any, delta0: Any, kw: dict) -> float:
+    """K0 = F'(delta0) [N/m] by autodiff (models.generic.stiffness)."""
+    from models.generic import stiffness
+
+    return float(stiffness(law, delta0, **kw))
+
+
 def _run(args: argparse.Namespace) -> int:
-    from .cli import UserError
+    from .runtime import UserError
 
     try:
         table = shift_table(args.law, args.x, method=args.method, n=args.n,
                             scene_path=args.scene, builtin=args.builtin, young=args.young,
-                            eta=args.eta)
+                            eta=args.eta, params=parse_params(args.param),
+                            law_files=lawfiles.paths_of(args))
     except ValueError as exc:  # a law/method/parameter combination that does not exist
-        raise UserError(str(exc)) from exc
+        raise UserError(str(exc)) from None
     if args.json:
-        print(json.dumps(table, indent=2))
+        print(json.dumps(table, indent=2, allow_nan=False))
         return 0
-    print(f"law {table['law']}, method {table['method']}, scene {table['scene']}")
+    print(f"law {table['law']}, rung {table['rung']}, scene {table['scene']}")
+    for k, v in table["params"].items():
+        print(f"  {k} = {v:.6g} ({table['sources'][k]})")
     print(f"{'x = delta_a/delta0':>20}  {'Delta f/f0':>14}")
     for xv, v in zip(table["x"], table["delta_f_over_f0"]):
         print(f"{xv:>20.6g}  {v:>14.8f}")
@@ -64,20 +244,30 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    from models.registry import SHIFT_METHODS, law_names
-
+    # no models import here: building the parser must not start JAX
     p = sub.add_parser("shift", help="predicted resonance shift Delta f/f0 of a contact law",
-                       description="Delta f/f0 at normalised amplitudes x = delta_a/delta0 for "
-                       "one contact law, by the paper's first-order average or the exact "
-                       "conservative backbone. x > 1 means the contact opens during the cycle.")
-    p.add_argument("--law", required=True, choices=law_names(), help="contact law")
-    p.add_argument("--x", required=True, type=float, nargs="+", help="amplitudes delta_a/delta0")
-    p.add_argument("--n", type=float, help="power-law exponent (law powerlaw)")
-    p.add_argument("--method", default="first-order", choices=SHIFT_METHODS,
-                   help="first-order (the paper's averaged stiffness) or backbone (exact)")
+                       description="Delta f/f0 at normalised amplitudes x = delta_a/delta0 "
+                       "(0 <= x <= 2) for one contact law, by the paper's first-order average "
+                       "or the exact conservative backbone. x > 1 means the contact opens "
+                       "during the cycle (Hertz).")
+    p.add_argument("--law", required=True,
+                   help="contact law, e.g. hertz, powerlaw, viscoelastic, jkr, dmt (a wrong "
+                   "name lists them all)")
+    p.add_argument("--x", required=True, type=float, nargs="+",
+                   help=f"amplitudes delta_a/delta0, each in [0, {X_MAX:g}]")
+    p.add_argument("--n", type=float, help="power-law exponent, 1 < n <= 3 (law powerlaw)")
+    p.add_argument("--method", default="first_order", choices=list(METHODS),
+                   help="the rung: first_order (the paper's averaged stiffness), backbone "
+                   "(exact) or paper_eq25 (the paper's formulas) (default: %(default)s)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="a law parameter or scene quantity by the name `beadrod laws` gives, "
+                   "e.g. --param gamma=0.5 (repeatable); a law parameter not given takes the "
+                   "scene's value where it has one, else its prior median")
+    lawfiles.add_argument(p)
     p.add_argument("--scene", help="scene TOML (default: the built-in scene)")
     p.add_argument("--builtin", default="paper", help="built-in scene name (default: paper)")
     p.add_argument("--young", type=float, help="Young's modulus [Pa] overriding the scene's")
-    p.add_argument("--eta", type=float, help="viscosity [Pa s] for viscoelastic laws")
+    p.add_argument("--eta", type=float, help="viscosity [Pa s] >= 0 for viscoelastic laws "
+                   "(default: the scene's)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_run)

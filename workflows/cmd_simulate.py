@@ -14,31 +14,41 @@ __all__ = ["register"]
 
 def _run(args: argparse.Namespace) -> int:
     from data.load import MEASUREMENTS
-    from data.synth import write_world
-    from workflows.cli import UserError
+    from data.synth import DEFAULT_SEED, WORLDS, write_world
 
+    from .runtime import UserError
+
+    if args.world not in WORLDS:
+        raise UserError(f"unknown world '{args.world}'; choose from: "
+                        + "; ".join(f"{k} ({v})" for k, v in WORLDS.items()))
+    seed = DEFAULT_SEED if args.seed is None else args.seed
+    if seed < 0:
+        raise UserError(f"--seed must be an integer >= 0, got {seed}")
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {out} is a file, not a folder")
     if (out / MEASUREMENTS).exists() and not args.force:
         raise UserError(f"{out / MEASUREMENTS} exists; use --force to overwrite")
-    folder = write_world(args.world, out, seed=args.seed)
-    print(f"world {args.world!r} (seed {args.seed}) written to {folder}")
+    folder = write_world(args.world, out, seed=seed)
+    print(f"world {args.world!r} (seed {seed}) written to {folder}")
     return 0
 
 
 def register(sub) -> None:
-    from data.synth import DEFAULT_SEED, WORLDS
-
+    # the world list lives in data.synth, which imports pandas: read it when run, not here
     p = sub.add_parser(
         "simulate",
         help="generate a synthetic dataset with a recorded ground truth",
         description="Generate a synthetic world and write it as a dataset folder "
-        "(measurements.csv, scene.toml, truth.json). Worlds: "
-        + "; ".join(f"{k}: {v}" for k, v in WORLDS.items()),
+        "(measurements.csv, scene.toml, truth.json): paper_like (a phenomenological "
+        "stand-in for the paper's protocols), hertz_dynamics (harmonic-balance sweeps of a "
+        "damped Hertz contact), ... (a wrong name lists them all)",
     )
-    p.add_argument("--world", choices=sorted(WORLDS), default="paper_like",
+    p.add_argument("--world", default="paper_like",
                    help="which synthetic world (default: %(default)s)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--seed", type=int, default=DEFAULT_SEED,
-                   help="random seed (default: %(default)s, the embedded folders' seed)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="random seed (default: the embedded folders' seed, data.synth."
+                   "DEFAULT_SEED)")
     p.add_argument("--force", action="store_true", help="overwrite an existing dataset")
     p.set_defaults(func=_run)

@@ -1,7 +1,9 @@
 """``beadrod validate DIR``: load and process a dataset, print what it holds.
 
-Bad data raise :class:`data.DataError` naming the file, the row and the column;
-the CLI prints it and exits non-zero.
+Bad data raise :class:`data.DataError` naming the file, the line (as a text editor
+numbers it) and the column; the CLI prints it and exits non-zero. Everything the
+protocol leaves out is listed: excluded drive sweeps with their lines and reason,
+unused cells, and the caveats of curve fits.
 """
 
 from __future__ import annotations
@@ -31,9 +33,11 @@ def summary(pd_, dataset, *, convention: str = "weight", elapsed_s: float | None
     lines.append(f"drive sweeps kept: {pd_.n_drive}; excluded: {len(pd_.excluded)}"
                  f" (2 % rule {'on' if opts.get('two_percent_rule') else 'off'}; shift "
                  f"relative to the {opts.get('shift_reference')} reference)")
-    if len(pd_.excluded):
-        for pid, grp in pd_.excluded.groupby("protocol", sort=False):
-            lines.append(f"  {pid}: {len(grp)} drive sweeps dropped: {grp['reason'].iloc[0]}")
+    from .compare_outputs import exclusions  # one list, shared with the report
+
+    for e in exclusions(pd_.excluded):
+        lines.append(f"  {e['protocol']}: {e['n']} drive sweeps dropped "
+                     f"({_lines(e['lines'])}): {e['reason']}")
     if pd_.n_drive:
         x = pd_.normalized_amplitude(convention)
         d0 = pd_.delta0(convention)
@@ -44,12 +48,23 @@ def summary(pd_, dataset, *, convention: str = "weight", elapsed_s: float | None
         lines.append(f"Delta f/f0: {pd_.drive_shift.min():.4f} - {pd_.drive_shift.max():.4f}")
     for note in dataset.curve_notes:
         lines.append(f"curve: {note}")
+    for note in pd_.notes:
+        lines.append(f"note: {note}")
     if dataset.truth is not None:
         lines.append(f"truth.json: synthetic world {dataset.truth.get('world', '?')!r}, "
                      f"seed {dataset.truth.get('seed', '?')}")
     if elapsed_s is not None:
         lines.append(f"loaded and processed in {elapsed_s * 1e3:.0f} ms")
     return "\n".join(lines)
+
+
+def _lines(values) -> str:
+    """``line 9`` or ``lines 9, 11, 13`` (the first ten, then a count)."""
+    ls = sorted(int(v) for v in values)
+    if len(ls) == 1:
+        return f"line {ls[0]}"
+    more = f" and {len(ls) - 10} more" if len(ls) > 10 else ""
+    return "lines " + ", ".join(str(x) for x in ls[:10]) + more
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -72,7 +87,7 @@ def register(sub) -> None:
         description="Load DIR (measurements.csv + scene.toml), validate every row, apply the "
         "paper's protocol (first reference gives f0 and Q; the 2 %% rule on later references), "
         "and print protocols, sweeps per kind and direction, exclusions with reasons and the "
-        "amplitude range. Exits non-zero naming file, row and column when the data are bad.",
+        "amplitude range. Exits non-zero naming file, line and column when the data are bad.",
     )
     p.add_argument("dir", help="dataset folder (or its measurements.csv)")
     p.add_argument("--no-two-percent-rule", action="store_true",

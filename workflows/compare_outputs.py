@@ -1,4 +1,11 @@
-"""Outputs of ``beadrod compare``: the tension block, the figures, the tables, the report."""
+"""Outputs of ``beadrod compare``: the data and truth blocks, the tension, the fit checks,
+the figures, the tables and the report.
+
+The tension statistics are computed in :func:`inference.tension.analyse_tension` from
+the fits this module schedules (:func:`tension_jobs`, run by workflows.parallel); this
+module adds what only the workflow knows (gate status, figure draws, files). Every key of
+``result.json`` and every column of ``comparison.csv`` is documented in docs/outputs.md.
+"""
 
 from __future__ import annotations
 
@@ -11,26 +18,48 @@ import numpy as np
 
 from ._io import write_json, write_text
 
-__all__ = ["data_block", "tension", "tension_jobs", "nuts_eta", "figures", "write_outputs"]
+__all__ = ["data_block", "exclusions", "tension", "tension_jobs", "nuts_eta", "fit_checks",
+           "report_extras", "figures", "write_outputs"]
 
 log = logging.getLogger("beadrod")
 
 
+def exclusions(excluded: Any) -> list[dict[str, Any]]:
+    """The drive sweeps a processed dataset excluded, per protocol in data order: protocol
+    id, number of sweeps, their lines in measurements.csv (as an editor numbers them),
+    their steps, and the reason (the 2 % rule names the reference step that tripped it).
+    ``beadrod validate`` prints the same list."""
+    if excluded is None or not len(excluded):
+        return []
+    out = []
+    for pid, grp in excluded.groupby("protocol", sort=False):
+        col = "line" if "line" in grp else "row" if "row" in grp else None
+        out.append({"protocol": str(pid), "n": int(len(grp)),
+                    "lines": sorted(int(r) for r in grp[col]) if col else [],
+                    "steps": sorted({int(s) for s in grp["step"]}) if "step" in grp else [],
+                    "reason": str(grp["reason"].iloc[0])})
+    return out
+
+
 def data_block(ds: Any) -> dict[str, Any]:
+    """What the report says about the data (JSON-ready; docs/outputs.md)."""
+    from .report_truth import world_truth
+
     truth = getattr(ds, "truth", None)
+    scene = getattr(ds, "scene", None)
+    young_range = getattr(scene, "young_range", None)
+    opts = dict(getattr(ds, "options", {}) or {})
     return {"source": str(getattr(ds, "source", "")), "hash": ds.data_hash,
-            "n_protocols": int(ds.n_protocols), "n_drive": int(len(ds.drive_shift)),
+            "scene": getattr(scene, "name", None),
+            "n_protocols": int(ds.n_protocols),
+            "protocol_ids": [str(p) for p in getattr(ds, "protocol_ids", ())],
+            "n_drive": int(len(ds.drive_shift)),
             "n_excluded": int(len(ds.excluded)) if ds.excluded is not None else 0,
-            "synthetic": truth is not None, "truth": truth}
-
-
-def _eta_triple(samples: np.ndarray) -> list[float]:
-    return [float(v) for v in np.percentile(np.asarray(samples).ravel(), [5, 50, 95])]
-
-
-# rungs on which the viscoelastic shift depends on eta (elsewhere damping moves the
-# damping, not the stiffness: models.viscoelastic)
-ETA_IN_SHIFT = ("paper_eq25",)
+            "excluded": exclusions(ds.excluded),
+            "two_percent_rule": opts.get("two_percent_rule"),
+            "shift_reference": opts.get("shift_reference"),
+            "young_range_Pa": list(young_range) if young_range is not None else None,
+            "synthetic": truth is not None, "truth": world_truth(truth)}
 
 
 def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str = "eta"):
@@ -65,6 +94,7 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str) -> list:
     otherwise (and if cfg asks for it) the paper's Eq. 25 shared/split pair and its
     shift-alone fit."""
     from inference.numpyro_models import ModelSpec
+    from inference.tension import ETA_IN_SHIFT
 
     from .parallel import Job
 
@@ -86,17 +116,18 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str) -> list:
 
 
 def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str, Any],
-            out: Path, done: dict[str, Any] | None = None) -> dict[str, Any]:
+            out: Path, done: dict[str, Any] | None = None,
+            runner: Any = None) -> dict[str, Any]:
     """The Q-versus-shift tension under the comparison's rung and under the paper's Eq. 25.
 
-    eta from the shift alone, from Q alone and jointly; their overlap; shared-vs-split
-    Bayes factor; which observable the joint fit misses. Under a rung where eta does not
-    enter the shift (first order, backbone: the correct physics), the shift-alone
-    posterior IS the prior (drawn, not fitted) and the tension is reported as such. The
-    Q-alone fit does not depend on the rung and is shared by both blocks. ``done`` holds
+    The statistics are :func:`inference.tension.analyse_tension`'s (eta from the shift
+    alone, from Q alone and jointly; their gap; split-vs-shared Bayes factor; the joint
+    fit's predictive checks). Under a rung where eta does not enter the shift (first
+    order, backbone: the correct physics) there is no shift-alone eta. The Q-alone fit
+    does not depend on the rung and is shared by both blocks. ``done`` holds
     the results of :func:`tension_jobs` already run (workflows.parallel); what is missing
-    is run here. Returns the block of the comparison's rung with the paper block under
-    'paper' (if run).
+    is run here by ``runner`` (workflows.comparison.JOBS). Returns the block of the
+    comparison's rung with the paper block under 'paper' (if run).
     """
     from .parallel import run_jobs
 
@@ -106,8 +137,8 @@ def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str
     todo = [j for j in tension_jobs(cfg, out, rung, lik) if j.key not in done]
     if todo:
         log.info("tension: %s", ", ".join(j.key.removeprefix("tension:") for j in todo))
-        done.update(run_jobs(todo, workers=1, ds=ds, inputs=inputs, resume=False,
-                             log_dir=out, quiet=bool(cfg.get("quiet")), n_devices=1))
+        done.update(run_jobs(todo, runner=runner, workers=1, ds=ds, inputs=inputs,
+                             resume=False, n_devices=1))
     eta_q = done["tension:eta_q"]
     block = _tension_block(runs, inputs, cfg, rung, eta_q,
                            done.get(f"tension:eta_shift:{rung}"), out)
@@ -120,84 +151,62 @@ def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str
 
 def _tension_block(runs, inputs, cfg, rung: str, eta_q, eta_shift,
                    out: Path) -> dict[str, Any]:
-    from inference.tension import bhattacharyya, ppc_failure, prob_greater
+    from inference.tension import ETA_IN_SHIFT, analyse_tension
+
+    from .report_tension import tension_sentences
 
     shared, split = runs["viscoelastic"], runs["viscoelastic_split"]
-    eta_joint = np.asarray(shared.idata.posterior["eta"]).ravel()
-    if rung not in ETA_IN_SHIFT:
-        eta_shift = _prior_eta(eta_joint.size, cfg["seed"] + 11)
-    post_split = split.idata.posterior
-    overlap = bhattacharyya(np.log10(eta_shift), np.log10(eta_q))
-    p_split = float(np.mean(np.asarray(post_split["eta_shift"]) > np.asarray(post_split["eta_q"])))
-    p_ind = prob_greater(np.log10(eta_shift), np.log10(eta_q), cfg["seed"])
-    log_bf = log_bf_err = None
-    if shared.summary.get("log_z") is not None and split.summary.get("log_z") is not None:
-        log_bf = split.summary["log_z"] - shared.summary["log_z"]
-        log_bf_err = float(np.hypot(shared.summary["log_z_err"], split.summary["log_z_err"]))
-    ppc = {"shift": ppc_failure(shared.idata, "shift_obs"),
-           "q": ppc_failure(shared.idata, "q_obs", log=True)}
-    missed = min(ppc, key=lambda k: (ppc[k]["p_value"], -ppc[k]["rms_std_residual"]))
-    by = (f"rms standardised residual {ppc[missed]['rms_std_residual']:.2f}, "
-          f"mean {ppc[missed]['mean_std_residual']:+.2f}, p = {ppc[missed]['p_value']:.3f}")
-    q_scale = None
+
+    def log_z(run):
+        s = run.summary
+        return (s["log_z"], s["log_z_err"]) if s.get("log_z") is not None else None
+
+    in_shift = rung in ETA_IN_SHIFT
+    block = analyse_tension(rung=rung, eta_q=eta_q, shared=shared.idata, split=split.idata,
+                            eta_shift=eta_shift if in_shift else None,
+                            log_z_shared=log_z(shared), log_z_split=log_z(split),
+                            seed=cfg["seed"])
+    block["log_bf_method"] = shared.summary.get("log_z_method")
+    block["paragraph"] = tension_sentences(block)  # the report's two sentences
+    block["fits_ok"] = {k: runs[k].summary["status"] == "ok"
+                        for k in ("viscoelastic", "viscoelastic_split")}
+    block["q_scale"] = None
     if "q_pred" in shared.idata.posterior and inputs.get("q_obs") is not None:
         # in natural units: the joint fit's linear Q against the measured reference Q
-        q_scale = {"q_pred_median": float(np.median(np.asarray(shared.idata.posterior["q_pred"]))),
-                   "q_obs_median": float(np.median(np.asarray(inputs["q_obs"])))}
-    block = {
-        "q_scale": q_scale,
-        "rung": rung, "eta_in_shift": rung in ETA_IN_SHIFT,
-        "fits_ok": {k: r.summary["status"] == "ok" for k, r in runs.items()},
-        "eta_shift_q05_q50_q95": _eta_triple(eta_shift),
-        "eta_q_q05_q50_q95": _eta_triple(eta_q),
-        "eta_joint_q05_q50_q95": _eta_triple(eta_joint),
-        "eta_split_shift_q05_q50_q95": _eta_triple(post_split["eta_shift"]),
-        "eta_split_q_q05_q50_q95": _eta_triple(post_split["eta_q"]),
-        "overlap": overlap, "p_shift_gt_q": p_split, "p_shift_gt_q_independent": p_ind,
-        "log_bf_split_vs_shared": log_bf, "log_bf_err": log_bf_err,
-        "log_bf_method": shared.summary.get("log_z_method"),
-        "ppc": {"shift_p": ppc["shift"]["p_value"], "q_p": ppc["q"]["p_value"],
-                "missed": missed, "by_how_much": by, "detail": ppc},
-    }
-    block["paragraph"] = tension_paragraph(block)
-    np.savez(out / "idata" / f"tension_eta_samples_{rung}.npz", shift=eta_shift, q=eta_q,
+        block["q_scale"] = {
+            "q_pred_median": float(np.median(np.asarray(shared.idata.posterior["q_pred"]))),
+            "q_obs_median": float(np.median(np.asarray(inputs["q_obs"])))}
+    eta_joint = np.asarray(shared.idata.posterior["eta"]).ravel()
+    # the eta figure draws the shift-alone posterior; where eta does not enter the shift
+    # that posterior is the prior, drawn here for the figure only (no statistic uses it)
+    shift_draws = eta_shift if in_shift else _prior_eta(eta_joint.size, cfg["seed"] + 11)
+    np.savez(out / "idata" / f"tension_eta_samples_{rung}.npz", shift=shift_draws, q=eta_q,
              joint=eta_joint)
     return block
 
 
-def tension_paragraph(t: dict[str, Any]) -> str:
-    es, eq, ej = (t[k] for k in ("eta_shift_q05_q50_q95", "eta_q_q05_q50_q95",
-                                  "eta_joint_q05_q50_q95"))
+def fit_checks(runs: dict[str, Any]) -> dict[str, Any]:
+    """LOO-PIT calibration of each law's shift predictive (inference.compare), by law."""
+    from inference.compare import loo_pit_summary
 
-    def rng(v):
-        return f"{v[1]:.3g} Pa s (90 % interval {v[0]:.3g}-{v[2]:.3g})"
+    out: dict[str, Any] = {}
+    for name, run in runs.items():
+        try:
+            out[name] = loo_pit_summary(run.idata, "shift_obs")
+        except Exception as exc:  # noqa: BLE001 (a degenerate tiny run: say so, go on)
+            out[name] = {"error": f"{type(exc).__name__}: {exc}"}
+    return {"loo_pit": out}
 
-    if t.get("eta_in_shift", t["rung"] == "paper_eq25"):
-        text = f"Under the '{t['rung']}' forward model the shift alone gives eta = {rng(es)}, "
-    else:
-        text = (f"Under the '{t['rung']}' forward model eta does not enter the shift, so the "
-                f"shift alone leaves eta at its prior ({rng(es)}); ")
-    text += (f"the reference Q alone gives eta = {rng(eq)}, and the joint fit with one shared "
-             f"eta gives {rng(ej)}. The two single-source posteriors overlap with a "
-             f"Bhattacharyya coefficient of {t['overlap']:.2f} (1 = identical, 0 = disjoint); "
-             f"in the split model P(eta_shift > eta_Q) = {t['p_shift_gt_q']:.2f}. ")
-    if t.get("log_bf_split_vs_shared") is not None:
-        text += (f"The log Bayes factor of split over shared eta is "
-                 f"{t['log_bf_split_vs_shared']:.2f} +- {t['log_bf_err']:.2f} nats "
-                 f"({t.get('log_bf_method') or 'evidence'}). ")
-    if t.get("q_scale"):
-        qs = t["q_scale"]
-        text += (f"With one shared eta the predicted linear Q has median "
-                 f"{qs['q_pred_median']:.3g} against a measured median {qs['q_obs_median']:.3g}. ")
-    text += (f"The joint fit misses the {t['ppc']['missed']} data most "
-             f"({t['ppc']['by_how_much']}; posterior predictive p = {t['ppc']['shift_p']:.3f} "
-             f"for the shift, {t['ppc']['q_p']:.3f} for Q).")
-    if not t.get("eta_in_shift", t["rung"] == "paper_eq25"):
-        text += (" In the correct first-order and backbone physics the viscosity does not "
-                 "change the resonance frequency at all, so a split eta_shift is an unused "
-                 "parameter (Bayes factor ~ 0 by construction) and the tension the paper "
-                 "reports exists only through its Eq. 25 (rung 'paper_eq25', block above).")
-    return text
+
+def report_extras(runs: dict[str, Any], ds: Any) -> dict[str, Any]:
+    """The result's ``checks`` (LOO-PIT per law) and ``truth_protocols`` (per-protocol
+    truths of a synthetic world against the data and each fit; None for measured data)."""
+    from .report_truth import protocol_truth
+
+    idatas = {name: run.idata for name, run in runs.items()}
+    return {"checks": fit_checks(runs),
+            "truth_protocols": protocol_truth(getattr(ds, "truth", None), ds.protocol_ids,
+                                              ds.f0, ds.q_ref, idatas)}
 
 
 def figures(runs, inputs, ds, result, out: Path) -> list[dict[str, Any]]:
@@ -209,11 +218,12 @@ def figures(runs, inputs, ds, result, out: Path) -> list[dict[str, Any]]:
 def write_outputs(result: dict[str, Any], out: Path) -> None:
     from .config import to_toml
     from .report import comparison_table, render_report
+    from .report_tables import resolved_config
 
     md, csv = comparison_table(result)
     write_text(out / "comparison.md", md)
     write_text(out / "comparison.csv", csv)
-    write_text(out / "config.resolved.toml", to_toml(result["config"]))
+    write_text(out / "config.resolved.toml", to_toml(resolved_config(result)))
     write_json(out / "result.json", json.loads(json.dumps(result, default=_jsonable)))
     render_report(result, out)
 

@@ -2,25 +2,40 @@
 
 The resolved configuration is a plain nested dict written into every output
 folder (``config.resolved.toml`` and inside the result JSON), so a run can be
-repeated exactly. Unknown keys are errors with a "did you mean" suggestion.
+repeated exactly. Unknown keys, wrong types and values outside their range are
+errors that name the key (unknown keys with a "did you mean" suggestion).
+:data:`DESCRIPTIONS` says what every key means; ``beadrod compare --help-config``
+prints it with the defaults, both taken from this module.
 """
 
 from __future__ import annotations
 
 import copy
 import difflib
+import textwrap
 import tomllib
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["DEFAULTS", "EVIDENCE_METHODS", "ConfigError", "load_config", "merge", "resolve",
-           "to_toml"]
+from models.rungs import DEFAULT_RUNG, FIT_RUNGS
+
+__all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFERENCES",
+           "ConfigError", "load_config", "merge", "resolve", "to_toml", "leaf_keys",
+           "describe", "normalise_laws"]
+
+# the fit rungs, from the one list of rungs (models.rungs imports no JAX, so the CLI builds
+# its parsers without starting it)
+RUNGS = FIT_RUNGS
+# data.process.process(shift_reference=...): the reference sweep each shift is taken against
+SHIFT_REFERENCES = ("first", "preceding")
 
 DEFAULTS: dict[str, Any] = {
     "data": None,  # dataset folder; None = the embedded synthetic default
     "out": "beadrod-out",
     "laws": None,  # None = every law in the inference registry
-    "rung": "backbone",  # forward-model rung: first_order | backbone
+    "law_files": [],  # contact laws users write themselves (docs/adding-a-law.md)
+    "rung": DEFAULT_RUNG,  # forward-model rung of every law (models.rungs.FIT_RUNGS)
     "seed": 0,
     "quiet": False,
     # worker processes for the fits (workflows.parallel): 0 = one per two usable cores, at
@@ -48,7 +63,7 @@ DEFAULTS: dict[str, Any] = {
         "robust": False,  # Student-t instead of Gaussian for the shift
         "use_q": True,  # reference Q enters the likelihood where a law predicts Q
         "two_percent_rule": True,
-        "shift_reference": "first",  # first | previous reference sweep
+        "shift_reference": "first",  # first | preceding reference sweep
     },
     # paper_rung: also run the tension under the paper's Eq. 25 (3 extra NUTS fits)
     "tension": {"enabled": True, "paper_rung": True},
@@ -58,6 +73,57 @@ DEFAULTS: dict[str, Any] = {
 
 EVIDENCE_METHODS = ("ns", "bridge", "smc")
 
+# what each key means (--help-config prints these beside the defaults)
+DESCRIPTIONS: dict[str, str] = {
+    "data": "dataset folder (measurements.csv + scene.toml); unset: the embedded synthetic "
+            "'paper_like' world",
+    "out": "output folder",
+    "laws": "laws to fit: a list of names (or one name); unset: every law",
+    "law_files": "Python files that each define one more contact law (NAME, PRIORS, "
+                 "force); see docs/adding-a-law.md",
+    "rung": "forward model: " + " | ".join(RUNGS),
+    "seed": "random seed (same seed, same numbers)",
+    "quiet": "no progress output (the log file keeps everything)",
+    "workers": "worker processes for the fits: 0 = one per two usable cores (at most 4), "
+               "1 = all in this process; the numbers do not depend on it",
+    "sampling.chains": "NUTS chains",
+    "sampling.warmup": "NUTS warmup (adaptation) iterations per chain",
+    "sampling.samples": "NUTS draws per chain",
+    "sampling.target_accept": "NUTS target acceptance probability, in (0, 1)",
+    "evidence.live_points": "nested-sampling live points (method ns)",
+    "evidence.smc_particles": "tempered-SMC particles (method smc)",
+    "evidence.smc_seeds": "independent SMC runs; their spread is the error bar",
+    "evidence.methods": "evidence estimators among " + ", ".join(EVIDENCE_METHODS)
+                        + "; the first listed ranks the laws",
+    "likelihood.robust": "Student-t instead of Gaussian noise for the shift",
+    "likelihood.use_q": "the reference Q enters the likelihood (the viscoelastic laws "
+                        "predict it; the others carry a free Q nuisance); false: the "
+                        "shift and f0 alone, and no tension analysis",
+    "likelihood.two_percent_rule": "drop a protocol's drive steps after its linear resonance "
+                                   "drifted by more than 2 % (the paper's rule)",
+    "likelihood.shift_reference": "reference of each Delta f/f0: " + " | ".join(
+        SHIFT_REFERENCES) + " reference sweep of the protocol",
+    "tension.enabled": "run the Q-versus-shift tension analysis (needs both viscoelastic "
+                       "laws and use_q)",
+    "tension.paper_rung": "also run the tension under the paper's Eq. 25 (3 extra NUTS fits)",
+    "report.figures": "draw the figures",
+    "report.pair_plots": "pair plot of the preferred law's posterior",
+    "report.rank_plots": "rank plots of the preferred law's posterior",
+}
+
+# the smallest values that can work, and why
+_INT_MIN: dict[str, tuple[int, str]] = {
+    "seed": (0, ""),
+    "workers": (0, "0 = one per two cores"),
+    "sampling.chains": (1, ""),
+    # below 20 numpyro adapts the step size only, never the mass matrix
+    "sampling.warmup": (20, "numpyro adapts the mass matrix from 20 on"),
+    "sampling.samples": (20, "bridge sampling needs 20 draws per chain"),
+    "evidence.live_points": (10, ""),
+    "evidence.smc_particles": (10, ""),
+    "evidence.smc_seeds": (1, ""),
+}
+
 
 class ConfigError(ValueError):
     """A configuration the user must fix (unknown key, wrong type)."""
@@ -66,6 +132,10 @@ class ConfigError(ValueError):
 def _suggest(key: str, options: list[str]) -> str:
     close = difflib.get_close_matches(key, options, n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _is_number(val: Any) -> bool:
+    return isinstance(val, (int, float)) and not isinstance(val, bool)
 
 
 def _check(cfg: dict[str, Any], ref: dict[str, Any], where: str, source: str) -> None:
@@ -81,13 +151,109 @@ def _check(cfg: dict[str, Any], ref: dict[str, Any], where: str, source: str) ->
             if not isinstance(val, dict):
                 raise ConfigError(f"{source}: '{where}{key}' must be a table")
             _check(val, ref[key], f"{where}{key}.", source)
-        elif ref[key] is not None and not isinstance(val, type(ref[key])):
-            ok = isinstance(ref[key], float) and isinstance(val, int)
-            if not ok:
-                raise ConfigError(
-                    f"{source}: '{where}{key}' must be {type(ref[key]).__name__}, "
-                    f"got {type(val).__name__} ({val!r})"
-                )
+            continue
+        want = _NONE_TYPES.get(f"{where}{key}") if ref[key] is None else type(ref[key])
+        if want is None:
+            continue
+        if want is float:
+            ok = _is_number(val)
+        elif want is int:
+            ok = isinstance(val, int) and not isinstance(val, bool)
+        else:
+            ok = isinstance(val, want)
+        if not ok:
+            names = " or ".join(t.__name__ for t in (want if isinstance(want, tuple)
+                                                      else (want,)))
+            raise ConfigError(f"{source}: '{where}{key}' must be {names}, "
+                              f"got {type(val).__name__} ({val!r})")
+
+
+# types of the keys whose default is None (unset)
+# (laws: checked by normalise_laws, which names what it accepts)
+_NONE_TYPES: dict[str, Any] = {"data": str}
+
+
+def leaf_keys(ref: dict[str, Any] | None = None, where: str = "") -> list[str]:
+    """Every key of :data:`DEFAULTS` (or ``ref``) as a dotted path, tables expanded."""
+    ref = DEFAULTS if ref is None else ref
+    out: list[str] = []
+    for key, val in ref.items():
+        if isinstance(val, dict):
+            out += leaf_keys(val, f"{where}{key}.")
+        else:
+            out.append(f"{where}{key}")
+    return out
+
+
+def _get(cfg: dict[str, Any], path: str) -> Any:
+    for part in path.split("."):
+        cfg = cfg[part]
+    return cfg
+
+
+def normalise_laws(laws: Any, known: Sequence[str] | None = None) -> list[str] | None:
+    """``laws`` as a list of names: a list, or one string (comma-separated names, as the
+    ``--laws`` flag takes them); None stays None (every law). Checked against ``known``."""
+    if laws is None:
+        return None
+    if isinstance(laws, str):
+        laws = [s.strip() for s in laws.split(",") if s.strip()]
+    if not isinstance(laws, list) or not all(isinstance(v, str) for v in laws):
+        raise ConfigError(f"laws must be a list of law names or one name, got {laws!r}")
+    if not laws:
+        raise ConfigError("laws is empty: name at least one law (or leave it out for all)")
+    if known is not None:
+        for name in laws:
+            if name not in known:
+                raise ConfigError(f"unknown law '{name}'{_suggest(name, list(known))}; "
+                                  f"choose from {', '.join(known)}")
+    return list(dict.fromkeys(laws))  # once each, in the order given
+
+
+# words a user may reach for, and the option value they mean
+_SYNONYMS = {"previous": "preceding", "last": "preceding", "initial": "first"}
+
+
+def _choice(value: Any, key: str, options: Iterable[str]) -> None:
+    options = list(options)
+    if value not in options:
+        hint = ""
+        if isinstance(value, str):
+            near = _SYNONYMS.get(value.lower())
+            hint = f" (did you mean '{near}'?)" if near in options else _suggest(value, options)
+        raise ConfigError(f"{key} must be one of {', '.join(options)}, got {value!r}{hint}")
+
+
+def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None:
+    for path, (low, why) in _INT_MIN.items():
+        v = _get(cfg, path)
+        if v < low:
+            raise ConfigError(f"{path} must be an integer >= {low}"
+                              + (f" ({why})" if why else "") + f", got {v}")
+    ta = cfg["sampling"]["target_accept"]
+    if not 0.0 < ta < 1.0:
+        raise ConfigError(f"sampling.target_accept must lie strictly between 0 and 1 "
+                          f"(an acceptance probability), got {ta}")
+    _choice(cfg["rung"], "rung", RUNGS)
+    _choice(cfg["likelihood"]["shift_reference"], "likelihood.shift_reference",
+            SHIFT_REFERENCES)
+    methods = cfg["evidence"]["methods"]
+    if not isinstance(methods, list) or not methods:
+        raise ConfigError("evidence.methods must list at least one of "
+                          f"{', '.join(EVIDENCE_METHODS)}")
+    for m in methods:
+        if m not in EVIDENCE_METHODS:
+            raise ConfigError(f"unknown evidence method '{m}'"
+                              f"{_suggest(str(m), list(EVIDENCE_METHODS))}"
+                              f"; choose from {', '.join(EVIDENCE_METHODS)}")
+    cfg["laws"] = normalise_laws(cfg["laws"], known_laws)
+    files = cfg["law_files"]
+    if not (isinstance(files, list) and all(isinstance(f, str) and f.strip() for f in files)):
+        raise ConfigError(f"law_files must be a list of file names, got {files!r}")
+    if cfg["data"] is not None and not cfg["data"].strip():
+        raise ConfigError("data must name a dataset folder, got an empty string")
+    if not cfg["out"].strip():
+        raise ConfigError("out must name a folder, got an empty string")
 
 
 def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
@@ -117,20 +283,39 @@ def load_config(path: str | Path) -> dict[str, Any]:
     return cfg
 
 
-def resolve(config_file: str | Path | None, flags: dict[str, Any]) -> dict[str, Any]:
-    """Defaults <- config file <- flags (flags given as a nested dict; None = unset)."""
+def resolve(config_file: str | Path | None, flags: dict[str, Any], *,
+            known_laws: Sequence[str] | None = None) -> dict[str, Any]:
+    """Defaults <- config file <- flags (flags given as a nested dict; None = unset).
+
+    Every value is checked: its type, its range (sampling counts that cannot work are
+    refused with the smallest that can), the rung, the shift reference, the evidence
+    methods and, with ``known_laws``, the law names. ``laws`` comes back as a list."""
     cfg = copy.deepcopy(DEFAULTS)
     if config_file is not None:
         cfg = merge(cfg, load_config(config_file))
     _check({k: v for k, v in flags.items() if v is not None}, DEFAULTS, "", "command line")
     cfg = merge(cfg, flags)
-    if cfg["workers"] < 0:
-        raise ConfigError(f"workers must be >= 0 (0 = one per two cores), got {cfg['workers']}")
-    for m in cfg["evidence"]["methods"]:
-        if m not in EVIDENCE_METHODS:
-            raise ConfigError(f"unknown evidence method '{m}'{_suggest(m, list(EVIDENCE_METHODS))}"
-                              f"; choose from {', '.join(EVIDENCE_METHODS)}")
+    _check_values(cfg, known_laws)
     return cfg
+
+
+def describe(keys: Iterable[str] | None = None) -> str:
+    """``key = default`` and what it means, for ``keys`` (dotted; default: every key),
+    grouped by table as a config file writes them."""
+    keys = leaf_keys() if keys is None else list(keys)
+    lines: list[str] = []
+    table = None
+    for path in keys:
+        head, _, leaf = path.rpartition(".")
+        if head != table:
+            table = head
+            lines.append(f"[{head}]" if head else "(top level)")
+        default = _get(DEFAULTS, path)
+        shown = "(unset)" if default is None else _fmt(default)
+        lines.append(f"  {leaf} = {shown}")
+        lines += textwrap.wrap(DESCRIPTIONS[path], width=88, initial_indent=" " * 6,
+                               subsequent_indent=" " * 6)
+    return "\n".join(lines)
 
 
 def _fmt(val: Any) -> str:

@@ -9,6 +9,11 @@ fits side by side use the cores one fit leaves idle; on 2 cores they gain nothin
 Why processes and not threads: NumPyro's effect handlers live on one module-global stack,
 so two models traced by two threads of one process would corrupt each other's traces.
 
+What a job does is not known here: :func:`run_jobs` is handed a :class:`JobRunner` (a
+module-level object, so that it pickles by reference into the workers) and calls it. The
+workers are set up by workflows.runtime, as the command line is, and send their log
+records to this process through a queue.
+
 Same seed, same numbers: a worker builds the same model from the same data, compiles the
 same programs and draws from the same keys as the in-process path (``workers = 1``), so
 draws and evidence agree to round-off (bit for bit on this machine; within 1e-8 relative
@@ -18,26 +23,24 @@ tests/test_cli.py).
 
 from __future__ import annotations
 
-import json
+import logging
+import logging.handlers
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
-__all__ = ["Job", "run_jobs", "resolve_workers"]
+from . import runtime
 
-# data and model inputs of the worker process, built once per (data, likelihood options)
-_DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
+__all__ = ["Job", "JobRunner", "run_jobs", "resolve_workers"]
 
 
 @dataclass(frozen=True)
 class Job:
-    """One unit of work: ``kind`` "fit" (pipeline.fit_law: NUTS, gate, LOO, evidence,
-    files under ``out``), "eta" (the eta draws of one extra viscoelastic NUTS fit,
-    compare_outputs.nuts_eta, with ModelSpec keywords ``spec`` and ``seed_offset``) or
-    "ns" (nested-sampling evidence of ``spec`` with cfg's live points and seed)."""
+    """One unit of work, as its runner reads it: ``kind`` (e.g. "fit", "eta", "ns"),
+    the law ``name``, its ``spec`` (a ModelSpec or ModelSpec keywords), the resolved
+    ``cfg``, the output folder ``out`` and a seed offset."""
 
     key: str
     kind: str
@@ -46,6 +49,19 @@ class Job:
     cfg: dict[str, Any] = field(hash=False)
     out: str = ""
     seed_offset: int = 0
+
+
+class JobRunner(Protocol):
+    """What runs a :class:`Job`, in this process or in a worker."""
+
+    def run(self, job: Job, resume: bool, ds: Any, inputs: dict[str, Any]) -> Any:
+        """The job's result, from the data and model inputs of this process."""
+
+    def run_in_worker(self, job: Job, resume: bool) -> Any:
+        """In a worker: load the data, run, return what crosses the pipe (picklable)."""
+
+    def collect(self, job: Job, value: Any) -> Any:
+        """In this process: the result from what :meth:`run_in_worker` returned."""
 
 
 def resolve_workers(value: int | None, n_jobs: int) -> int:
@@ -63,80 +79,54 @@ def resolve_workers(value: int | None, n_jobs: int) -> int:
     return max(1, min(int(value), n_jobs))
 
 
-def _data(cfg: dict[str, Any]):
-    from inference.likelihood import model_inputs
-
-    from .pipeline import load_data
-
-    key = json.dumps({"data": cfg["data"], "likelihood": cfg["likelihood"]}, sort_keys=True,
-                     default=str)
-    if key not in _DATA:
-        ds = load_data(cfg)
-        _DATA[key] = (ds, model_inputs(ds))
-    return _DATA[key]
+def _worker(runner: JobRunner, job: Job, resume: bool) -> Any:
+    return runner.run_in_worker(job, resume)
 
 
-def _run(job: Job, resume: bool, ds: Any = None, inputs: dict | None = None) -> Any:
-    from . import compare_outputs
-    from .pipeline import fit_law
+class _Relay(logging.Handler):
+    """Parent side of the workers' log queue: each record goes to this process's logger
+    of the same name (its handlers print and file it)."""
 
-    if ds is None:
-        ds, inputs = _data(job.cfg)
-    if job.kind == "fit":
-        return fit_law(job.name, job.spec, inputs, ds, job.cfg, Path(job.out), resume=resume)
-    if job.kind == "eta":
-        return compare_outputs.nuts_eta(job.spec, inputs, job.cfg, job.seed_offset)
-    if job.kind == "ns":
-        from inference.evidence import nested_sampling_log_z
-        from inference.numpyro_models import build_model
+    def handle(self, record: logging.LogRecord) -> bool:
+        logging.getLogger(record.name).handle(record)
+        return True
 
-        return nested_sampling_log_z(build_model(job.spec), {"data": inputs},
-                                     num_live_points=job.cfg["evidence"]["live_points"],
-                                     seed=job.cfg["seed"])
-    raise ValueError(f"unknown job kind {job.kind!r}")
+    def emit(self, record: logging.LogRecord) -> None:  # pragma: no cover - handle() does
+        pass
 
 
-def _worker(job: Job, resume: bool) -> Any:
-    res = _run(job, resume)
-    # a LawRun's InferenceData travels through its netCDF file, not through the pipe
-    return ("fit", res.summary) if job.kind == "fit" else (job.kind, res)
-
-
-def _init(n_devices: int, log_dir: str, quiet: bool) -> None:
-    from .cli import _enable_x64, host_devices
-
-    host_devices(n_devices)  # inherited from the parent's environment in practice
-    _enable_x64()
-    from inference.sample import configure
-
-    configure(n_devices)
-    from .cmd_compare import setup_logging
-
-    setup_logging(Path(log_dir), quiet)
-
-
-def run_jobs(jobs: list[Job], *, workers: int, ds: Any, inputs: dict[str, Any],
-             resume: bool, log_dir: Path, quiet: bool, n_devices: int) -> dict[str, Any]:
-    """Run ``jobs`` (in the order given, longest first is best) and return key -> result:
-    a pipeline.LawRun for "fit" jobs, the eta draws for "eta" jobs, an EvidenceResult for
-    "ns" jobs. ``workers`` = 1 runs
-    them here, one after the other."""
+def run_jobs(jobs: list[Job], *, runner: JobRunner, workers: int, ds: Any,
+             inputs: dict[str, Any], resume: bool, n_devices: int) -> dict[str, Any]:
+    """Run ``jobs`` with ``runner`` and return key -> result. ``workers`` = 1 runs them
+    here, one after the other, in the order given; more start that many worker processes
+    (``n_devices`` host devices each) and hand them the jobs in the order given (longest
+    first is best)."""
+    if runner is None:
+        raise TypeError("run_jobs needs the runner of its jobs (e.g. workflows.comparison.JOBS)")
     if workers <= 1:
-        return {j.key: _run(j, resume, ds, inputs) for j in jobs}
-    from inference.sample import load_idata
-
-    from .pipeline import LawRun
-
+        return {j.key: runner.run(j, resume, ds, inputs) for j in jobs}
     ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked JAX state
+    queue = ctx.Queue()
+    listener = logging.handlers.QueueListener(queue, _Relay())
+    listener.start()
     results: dict[str, Any] = {}
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init,
-                             initargs=(n_devices, str(log_dir), quiet)) as pool:
-        futures = {j.key: (j, pool.submit(_worker, j, resume)) for j in jobs}
-        for key, (job, fut) in futures.items():
-            kind, value = fut.result()
-            if kind == "fit":
-                idata = load_idata(Path(job.out) / "idata" / f"{job.name}.nc")
-                results[key] = LawRun(job.name, value, idata)
-            else:
-                results[key] = value
-    return results
+    try:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                 initializer=runtime.init_worker,
+                                 initargs=(n_devices, queue)) as pool:
+            futures = {pool.submit(_worker, runner, j, resume): j for j in jobs}
+            pending = set(futures)
+            try:
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in finished:
+                        job = futures[fut]
+                        results[job.key] = runner.collect(job, fut.result())
+            except BaseException:
+                # one job failed (or Ctrl-C): the jobs not started yet are not started
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
+    finally:
+        listener.stop()
+        queue.close()
+    return {j.key: results[j.key] for j in jobs}

@@ -21,8 +21,8 @@ import numpy as np
 
 from ._io import write_json
 
-__all__ = ["LawRun", "MODEL_SPECS", "job_order", "comparison_specs", "load_data", "fit_law",
-           "run_compare"]
+__all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law",
+           "fit_steps", "inputs_digest"]
 
 log = logging.getLogger("beadrod")
 
@@ -34,51 +34,81 @@ def beadrod_version() -> str:
         return "0+unknown"
 
 
-# One list of the models the comparison loop fits: law registry name -> ModelSpec kwargs.
-MODEL_SPECS: dict[str, dict[str, Any]] = {
-    "hertz": {"law": "hertz"},
-    "powerlaw": {"law": "powerlaw"},
-    "viscoelastic": {"law": "viscoelastic", "eta_mode": "shared"},
-    "viscoelastic_split": {"law": "viscoelastic", "eta_mode": "split"},
-    "jkr": {"law": "jkr"},
-    "baseline": {"law": "baseline"},
+# Units of the comparison's nuisance parameters; the laws' own parameters carry theirs
+# (models.law.Param) and the baseline's are dimensionless but for mu_f0/tau_f0.
+NUISANCE_UNITS = {
+    "delta0_scatter": "-", "sigma_shift": "-", "offset_down": "-", "sigma_logq": "-",
+    "amp": "-", "a_ref": "-", "power": "-", "mu_f0": "Hz", "tau_f0": "Hz", "mu_logq": "-",
+    "tau_logq": "-",
 }
-
-LABELS = {
-    "hertz": "Hertz",
-    "powerlaw": "power law (rough)",
-    "viscoelastic": "viscoelastic (shared eta)",
-    "viscoelastic_split": "viscoelastic (eta_shift, eta_Q)",
-    "jkr": "JKR adhesion",
-    "baseline": "law-free baseline",
-}
-
-PARAM_UNITS = {
-    "young": "Pa", "eta": "Pa s", "eta_shift": "Pa s", "eta_q": "Pa s", "n": "-",
-    "gamma": "J/m^2", "delta0_scatter": "-", "sigma_shift": "-", "offset_down": "-",
-    "sigma_logq": "-", "amp": "-", "power": "-", "mu_f0": "Hz", "tau_f0": "Hz",
-    "mu_logq": "-", "tau_logq": "-", "delta0_ref_log": "log m",
-}
+BASELINE_LABEL = "law-free baseline"
 
 
-def comparison_specs(names: list[str] | None, rung: str, likelihood: str) -> dict[str, Any]:
-    """ModelSpec per requested name; the rung applies to every law that has it."""
-    from inference.numpyro_models import ModelSpec
+def model_names() -> list[str]:
+    """The comparison's models: every registered law (built in or from a law file), then
+    the law-free baseline. The law registry is the one list."""
+    from inference.numpyro_models import model_names as names
 
-    names = list(MODEL_SPECS) if names is None else names
-    unknown = [n for n in names if n not in MODEL_SPECS]
+    return list(names())
+
+
+def default_model_names() -> list[str]:
+    """The models ``beadrod compare`` fits when no --laws are given: every registered law
+    whose ``in_default_comparison`` is set (a law says in its description why not), then
+    the baseline."""
+    from models.registry import get_law
+
+    return [n for n in model_names()
+            if n == "baseline" or get_law(n).in_default_comparison]
+
+
+def model_labels() -> dict[str, str]:
+    from models.registry import laws
+
+    return {**{law.name: law.label for law in laws()}, "baseline": BASELINE_LABEL}
+
+
+def param_units() -> dict[str, str]:
+    from models.registry import laws
+
+    units = dict(NUISANCE_UNITS)
+    for law in laws():
+        units.update({p.name: p.unit for p in law.params})
+    return units
+
+
+def __getattr__(name: str) -> Any:
+    # MODEL_SPECS / LABELS / PARAM_UNITS follow the registry, laws added at run time too
+    if name == "MODEL_SPECS":
+        return {n: {"law": n} for n in model_names()}
+    if name == "LABELS":
+        return model_labels()
+    if name == "PARAM_UNITS":
+        return param_units()
+    raise AttributeError(name)
+
+
+def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
+                     use_q: bool = True) -> dict[str, Any]:
+    """ModelSpec per requested name, every law at the same ``rung`` (the baseline has no
+    rung). A law that cannot run at ``rung`` is refused with a clear message, never
+    swapped for another rung."""
+    from inference.numpyro_models import BASELINE, ModelSpec
+    from models.registry import check_rung, get_law
+
+    check_rung(rung, fit=True)
+    known = model_names()
+    names = default_model_names() if names is None else list(names)
+    unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"unknown law(s) {unknown}; choose from {list(MODEL_SPECS)}")
-    specs = {}
-    for name in names:
-        kw = dict(MODEL_SPECS[name])
-        law_rung = rung
-        if rung == "backbone" and kw["law"] == "jkr":
-            law_rung = "first_order"  # the backbone rung covers F ~ delta^n only
-        if rung == "paper_eq25" and kw["law"] != "viscoelastic":
-            law_rung = "first_order"  # the paper's own formulas for the other laws
-        specs[name] = ModelSpec(rung=law_rung, likelihood=likelihood, **kw)
-    return specs
+        raise ValueError(f"unknown law(s) {unknown}; choose from {known}")
+    lacking = [n for n in names if n != BASELINE and rung not in get_law(n).rungs]
+    if lacking:
+        have = {n: list(get_law(n).rungs) for n in lacking}
+        raise ValueError(f"law(s) {lacking} cannot be fitted at rung '{rung}' (their rungs: "
+                         f"{have}); choose another --rung or leave them out with --laws")
+    return {name: ModelSpec(law=name, rung=rung, likelihood=likelihood, use_q=use_q)
+            for name in names}
 
 
 def load_data(cfg: dict[str, Any]):
@@ -101,101 +131,200 @@ class LawRun:
     idata: Any
 
 
-def _cache_key(name: str, spec: Any, cfg: dict[str, Any], data_hash: str) -> str:
-    blob = json.dumps({"law": name, "spec": spec.name, "sampling": cfg["sampling"],
-                       "evidence": cfg["evidence"], "seed": cfg["seed"],
-                       "data": data_hash, "version": beadrod_version()}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
 def _param_summary(idata: Any, truth: dict[str, Any] | None) -> list[dict[str, Any]]:
     post = idata.posterior
+    units = param_units()
     rows = []
     for name in post.data_vars:
         arr = np.asarray(post[name])
-        if arr.ndim != 2 or name not in PARAM_UNITS:
+        if arr.ndim != 2 or name not in units:
             continue  # per-protocol vectors and deterministics are in the idata file
         flat = arr.ravel()
         q05, q95 = np.percentile(flat, [5, 95])
         tv = (truth or {}).get(name)
-        rows.append({"name": name, "unit": PARAM_UNITS[name], "mean": float(flat.mean()),
+        rows.append({"name": name, "unit": units[name], "mean": float(flat.mean()),
                      "sd": float(flat.std()), "q05": float(q05), "q95": float(q95),
                      "truth": float(tv) if isinstance(tv, (int, float)) else None})
     return rows
 
 
+# keys of the resolved config that cannot change one law's fit: where files go, how the run
+# is shown, which other laws run, how they are scheduled, the tension and the figures; the
+# data enter through the digest of the model inputs. Every other key, present or future,
+# enters the cache key.
+_NOT_IN_FIT = ("out", "quiet", "laws", "workers", "data", "tension", "report")
+
+
+def inputs_digest(inputs: dict[str, Any]) -> str:
+    """sha256 of the model inputs (every array's dtype, shape and bytes; every scalar;
+    nested tables key by key): what the processed data put into the model, whatever
+    options processed them."""
+    h = hashlib.sha256()
+
+    def feed(v: Any) -> None:
+        if isinstance(v, dict):
+            for k in sorted(v):
+                h.update(f"<{k}>".encode())
+                feed(v[k])
+        elif isinstance(v, (list, tuple)):
+            h.update(f"[{len(v)}]".encode())
+            for item in v:
+                feed(item)
+        elif v is None or isinstance(v, (bool, int, float, str)):
+            h.update(repr(v).encode())
+        else:
+            a = np.ascontiguousarray(np.asarray(v))
+            if a.dtype == object:  # no stable bytes: hash the elements
+                feed(a.tolist())
+                return
+            h.update(f"{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
+
+    feed(inputs)
+    return h.hexdigest()
+
+
+def _cache_key(name: str, spec: Any, cfg: dict[str, Any], inputs: dict[str, Any],
+               data_hash: str) -> str:
+    """What a cached fit must match to be reused: the whole ModelSpec (law, rung,
+    likelihood, use_q, ...), every config key that can change the fit (sampling, evidence,
+    seed, likelihood options, ...), the model inputs, the raw data hash and the version."""
+    from dataclasses import asdict
+
+    blob = json.dumps({"law": name, "spec": asdict(spec),
+                       "cfg": {k: v for k, v in cfg.items() if k not in _NOT_IN_FIT},
+                       "inputs": inputs_digest(inputs), "data": data_hash,
+                       "version": beadrod_version()}, sort_keys=True, default=repr)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def _cached(name: str, key: str, summary_path: Path, idata_path: Path) -> LawRun | None:
+    """The finished fit in the output folder if its key is ``key`` and both its files
+    read back; None otherwise (a truncated or foreign file is refitted, not an error)."""
+    from .idata_io import load_idata
+
+    if not (summary_path.exists() and idata_path.exists()):
+        return None
+    try:
+        cached = json.loads(summary_path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        log.warning("%s: %s is unreadable (%s); refitting", name, summary_path, exc)
+        return None
+    if not isinstance(cached, dict) or cached.get("cache_key") != key:
+        log.info("%s: inputs changed since the cached fit; refitting", name)
+        return None
+    try:
+        idata = load_idata(idata_path)
+    except Exception as exc:  # noqa: BLE001 - netCDF/HDF5 raise many types on a bad file
+        log.warning("%s: %s is unreadable (%s); refitting", name, idata_path, exc)
+        return None
+    return LawRun(name, cached, idata)
+
+
+def fit_steps(cfg: dict[str, Any]) -> int:
+    """Progress steps of one fit_law call: NUTS, diagnostics + LOO, one per estimator."""
+    return 2 + len(cfg["evidence"]["methods"])
+
+
 def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str, Any],
-            out: Path, *, resume: bool = False) -> LawRun:
-    """NUTS + gate + LOO + evidence for one law; writes idata/NAME.nc and laws/NAME.json."""
+            out: Path, *, resume: bool = False, job: str | None = None) -> LawRun:
+    """NUTS + gate + LOO + evidence for one law; writes idata/NAME.nc and laws/NAME.json.
+
+    An evidence estimator that fails (bridge sampling that does not converge, ...) marks
+    the law FAILED with the reason and the fit is kept; the caller carries on. ``job``
+    names the fit in the progress records (workflows.progress; default ``name``)."""
     from inference import diagnostics
     from inference.bridge import bridge_sampling_log_z
     from inference.evidence import combined_agreement, nested_sampling_log_z, smc_log_z
     from inference.numpyro_models import build_model
-    from inference.sample import load_idata, run_nuts, save_idata
+    from inference.sample import run_nuts
 
-    key = _cache_key(name, spec, cfg, ds.data_hash)
+    from .idata_io import save_idata
+    from .progress import begin, done
+
+    job = job or name
+    key = _cache_key(name, spec, cfg, inputs, ds.data_hash)
     summary_path = out / "laws" / f"{name}.json"
     idata_path = out / "idata" / f"{name}.nc"
-    if resume and summary_path.exists() and idata_path.exists():
-        cached = json.loads(summary_path.read_text())
-        if cached.get("cache_key") == key:
-            log.info("%s: reusing the finished fit (inputs unchanged)", name)
-            return LawRun(name, cached, load_idata(idata_path))
-        log.info("%s: inputs changed since the cached fit; refitting", name)
+    if resume:
+        hit = _cached(name, key, summary_path, idata_path)
+        if hit is not None:
+            done(log, job, "%s: reusing the finished fit (inputs unchanged)", name,
+                 steps=fit_steps(cfg), final=True)
+            return hit
 
     s = cfg["sampling"]
-    model = build_model(spec)
-    log.info("%s: NUTS (%d chains x %d warmup + %d draws), model %s", name, s["chains"],
-             s["warmup"], s["samples"], spec.name)
+    model = build_model(spec, scene=inputs.get("scene"))
+    begin(log, job, "%s: NUTS (%d chains x %d warmup + %d draws), model %s", name,
+          s["chains"], s["warmup"], s["samples"], spec.name)
     t0 = time.perf_counter()
     fit = run_nuts(model, inputs, num_warmup=s["warmup"], num_samples=s["samples"],
                    num_chains=s["chains"], seed=cfg["seed"], target_accept=s["target_accept"],
-                   data_hash=ds.data_hash, extra_attrs={"law": name})
+                   data_hash=ds.data_hash, extra_attrs={"law": name},
+                   coords={"protocol": list(ds.protocol_ids)})
     timings = dict(fit.timings)
+    done(log, job, "%s: NUTS done (%.0f s)", name, time.perf_counter() - t0)
+    begin(log, job, "%s: diagnostics and LOO", name)
     ess_min = min(400.0, 0.4 * s["samples"] * s["chains"])
     verdict = diagnostics.check(fit.idata, ess_min=ess_min)
     loo = diagnostics.loo_report(fit.idata)
+    done(log, job, "%s: diagnostics %s", name, "passed" if verdict.passed else "FAILED")
     ev_cfg = cfg["evidence"]
-    estimates = {}
+    estimates, ev_failures = {}, []
     for method in ev_cfg["methods"]:  # in the order given: the first is the one that ranks
-        if method == "ns":
-            log.info("%s: evidence by nested sampling (%d live points)", name,
-                     ev_cfg["live_points"])
-            estimates["ns"] = nested_sampling_log_z(model, {"data": inputs},
-                                                    num_live_points=ev_cfg["live_points"],
-                                                    seed=cfg["seed"])
-        elif method == "bridge":
-            log.info("%s: evidence by bridge sampling from the NUTS draws", name)
-            estimates["bridge"] = bridge_sampling_log_z(model, {"data": inputs},
-                                                        fit.idata.posterior, seed=cfg["seed"])
-        elif method == "smc":
-            log.info("%s: evidence by tempered SMC (%d particles x %d seeds)", name,
-                     ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
-            seeds = tuple(range(cfg["seed"], cfg["seed"] + ev_cfg["smc_seeds"]))
-            estimates["smc"] = smc_log_z(model, {"data": inputs},
-                                         num_particles=ev_cfg["smc_particles"], seeds=seeds)
+        try:
+            if method == "ns":
+                begin(log, job, "%s: evidence by nested sampling (%d live points)", name,
+                      ev_cfg["live_points"])
+                est = nested_sampling_log_z(model, {"data": inputs},
+                                            num_live_points=ev_cfg["live_points"],
+                                            seed=cfg["seed"])
+            elif method == "bridge":
+                begin(log, job, "%s: evidence by bridge sampling from the NUTS draws", name)
+                est = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior,
+                                            seed=cfg["seed"])
+            else:
+                begin(log, job, "%s: evidence by tempered SMC (%d particles x %d seeds)", name,
+                      ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
+                seeds = tuple(range(cfg["seed"], cfg["seed"] + ev_cfg["smc_seeds"]))
+                est = smc_log_z(model, {"data": inputs},
+                                num_particles=ev_cfg["smc_particles"], seeds=seeds)
+        except (RuntimeError, ValueError, FloatingPointError) as exc:
+            # no evidence from this estimator: the law is FAILED, the comparison goes on
+            ev_failures.append(f"evidence ({method}) failed: {exc}")
+            log.error("%s: evidence by %s FAILED: %s", name, method, exc)
+            done(log, job, "%s: evidence by %s failed", name, method)
+            continue
+        estimates[method] = est
+        done(log, job, "%s: log Z = %.2f +- %.2f (%s, %.0f s)", name, est.log_z,
+             est.log_z_err, method, est.wall_s)
     for k, est in estimates.items():
         timings[f"evidence_{k}_s"] = est.wall_s
     timings["total_s"] = time.perf_counter() - t0
+    # the first listed estimator ranks; one that failed leaves log_z empty
+    first = estimates.get(ev_cfg["methods"][0])
+    second = next((estimates[m] for m in ev_cfg["methods"][1:2] if m in estimates), None)
     ests = list(estimates.values())
     agree = None
     if len(ests) >= 2:
         agree = all(combined_agreement(ests[0], e)[0] for e in ests[1:])
         if not agree:
             log.warning("%s: the two evidence estimators DISAGREE beyond their errors", name)
-    failures = list(verdict.failures)
+    failures = list(verdict.failures) + ev_failures
     summary = {
-        "name": name, "label": LABELS.get(name, name), "model": spec.name, "rung": spec.rung,
-        "status": "ok" if verdict.passed else "failed", "failures": failures,
+        "name": name, "label": model_labels().get(name, name), "model": spec.name,
+        "rung": spec.rung,
+        "status": "ok" if not failures else "failed", "failures": failures,
         "diagnostics": {"rhat_max": verdict.rhat_max, "ess_bulk_min": verdict.ess_bulk_min,
                         "ess_tail_min": verdict.ess_tail_min,
                         "divergences": verdict.divergences, "ebfmi_min": verdict.bfmi_min},
         "params": _param_summary(fit.idata, getattr(ds, "truth", None)),
-        "log_z": ests[0].log_z if ests else None, "log_z_err": ests[0].log_z_err if ests else None,
-        "log_z_method": ests[0].method if ests else None,
-        "log_z2": ests[1].log_z if len(ests) > 1 else None,
-        "log_z2_err": ests[1].log_z_err if len(ests) > 1 else None,
-        "log_z2_method": ests[1].method if len(ests) > 1 else None,
+        "log_z": first.log_z if first else None,
+        "log_z_err": first.log_z_err if first else None,
+        "log_z_method": first.method if first else None,
+        "log_z2": second.log_z if second else None,
+        "log_z2_err": second.log_z_err if second else None,
+        "log_z2_method": second.method if second else None,
         "evidence_agree": agree, "evidence": {k: e.to_dict() for k, e in estimates.items()},
         "elpd_loo": loo["elpd_loo"], "elpd_loo_se": loo["se"],
         "pareto_k_bad": loo["k_bad"] + loo["k_very_bad"], "loo": loo,
@@ -203,6 +332,8 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     }
     save_idata(fit.idata, idata_path)
     write_json(summary_path, summary)
+    done(log, job, "%s: finished (%s, %.0f s)", name, "ok" if not failures else "FAILED",
+         timings["total_s"], steps=0, final=True)
     return LawRun(name, summary, fit.idata)
 
 
@@ -212,83 +343,30 @@ def preferred_law(laws: list[dict[str, Any]]) -> tuple[str, str]:
           and r["name"] != "baseline"]
     if not ok:
         return "none", "no law passed its sampling diagnostics"
+    from .report_tables import fmt_pm
+
     best = max(ok, key=lambda r: r["log_z"])
     others = sorted((r for r in ok if r is not best), key=lambda r: -r["log_z"])
-    reason = f"highest log evidence ({best['log_z']:.1f} +- {best['log_z_err']:.1f})"
+    err = lambda *rs: float(np.hypot(*[r.get("log_z_err") or 0.0 for r in rs]))
+    reason = f"highest log evidence ({fmt_pm(best['log_z'], best['log_z_err'])})"
     if others:
         d = best["log_z"] - others[0]["log_z"]
-        reason += f", {d:.1f} nats above {others[0]['label']}"
+        reason += f", {fmt_pm(d, err(best, others[0]))} nats above {others[0]['label']}"
     base = next((r for r in laws if r["name"] == "baseline" and r.get("log_z") is not None), None)
     if base is not None and base["log_z"] > best["log_z"]:
-        reason += (f"; but the law-free baseline beats it by {base['log_z'] - best['log_z']:.1f}"
+        lead = fmt_pm(base["log_z"] - best["log_z"], err(base, best))
+        reason += (f"; but the law-free baseline beats it by {lead}"
                    " nats: no contact law captures the shape of the data")
     return best["name"], reason
 
 
 # longest first, so that the last job to finish is a short one (measured on the embedded
 # data: JKR and the baseline cost the most, the viscoelastic pair the least)
-_JOB_ORDER = ("jkr", "baseline", "powerlaw", "hertz", "tension:viscoelastic",
+_JOB_ORDER = ("jkr", "greenwood_williamson", "dmt", "baseline", "powerlaw", "hertz",
+               "tension:viscoelastic",
                "tension:viscoelastic_split", "viscoelastic", "viscoelastic_split")
 
 
 def job_order(job: Any) -> int:
     """Sort key of a workflows.parallel.Job: the costliest first, unknown keys last."""
     return _JOB_ORDER.index(job.key) if job.key in _JOB_ORDER else len(_JOB_ORDER)
-
-
-def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
-                law_names: list[str] | None = None) -> dict[str, Any]:
-    """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write all
-    outputs into ``out`` and return the result dict the report renders.
-
-    The fits (and the tension's extra fits) run in ``cfg['workers']`` processes side by
-    side (workflows.parallel; 1 = in this process); the numbers do not depend on it."""
-    from inference.likelihood import model_inputs
-
-    from . import compare_outputs
-    from .parallel import Job, resolve_workers, run_jobs
-
-    t_start = time.perf_counter()
-    ds = load_data(cfg)
-    inputs = model_inputs(ds)
-    names = law_names if law_names is not None else cfg["laws"]
-    lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
-    specs = comparison_specs(names, cfg["rung"], lik)
-    jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
-    do_tension = cfg["tension"]["enabled"] and {"viscoelastic", "viscoelastic_split"} <= set(specs)
-    if do_tension:
-        jobs += compare_outputs.tension_jobs(cfg, out, specs["viscoelastic"].rung, lik)
-    jobs.sort(key=job_order)
-    workers = resolve_workers(cfg["workers"], len(jobs))
-    n_dev = max(1, min(int(cfg["sampling"]["chains"]), 8))
-    if workers > 1:
-        log.info("fitting %d models in %d worker processes", len(jobs), workers)
-    done = run_jobs(jobs, workers=workers, ds=ds, inputs=inputs, resume=resume, log_dir=out,
-                    quiet=bool(cfg.get("quiet")), n_devices=n_dev)
-    runs: dict[str, LawRun] = {name: done[name] for name in specs}
-    timings = {f"fit_{k}_s": r.summary["timings"]["total_s"] for k, r in runs.items()}
-    timings["fits_wall_s"] = time.perf_counter() - t_start
-    timings["workers"] = workers
-    tension = None
-    if do_tension:
-        t0 = time.perf_counter()
-        tension = compare_outputs.tension(runs, inputs, ds, cfg, out, done)
-        timings["tension_s"] = time.perf_counter() - t0
-    laws = [r.summary for r in runs.values()]
-    pref, why = preferred_law(laws)
-    result = {
-        "title": "beadrod: contact-law comparison",
-        "beadrod_version": beadrod_version(),
-        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "data": compare_outputs.data_block(ds),
-        "laws": laws, "preferred": pref, "preferred_reason": why,
-        "tension": tension, "config": cfg,
-    }
-    t0 = time.perf_counter()
-    result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out) \
-        if cfg["report"]["figures"] else []
-    timings["figures_s"] = time.perf_counter() - t0
-    timings["total_s"] = time.perf_counter() - t_start
-    result["timings"] = timings
-    compare_outputs.write_outputs(result, out)
-    return result

@@ -1,8 +1,10 @@
 """All beadrod figures, and :func:`save_figure` which writes them as PNG and PDF.
 
 The figure functions live in :mod:`workflows.plots_data` (the paper's figures, FRCs,
-accuracy vs cost) and :mod:`workflows.plots_inference` (tension, evidence, pair, rank,
-LOO-PIT); this module gathers them so callers import from one place.
+accuracy vs cost), :mod:`workflows.plots_ppc` (the posterior predictive shift, the
+paper's Figs. 7 and 9) and :mod:`workflows.plots_inference` (tension, evidence, pair,
+rank, LOO-PIT); this module gathers them so callers import from one place. Colours and
+labels: :mod:`workflows.styles`.
 """
 
 from __future__ import annotations
@@ -19,9 +21,8 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from workflows._io import atomic_path  # noqa: E402
 from workflows.plots_data import (  # noqa: E402
-    DIRECTION_COLORS,
     DIRECTION_NAMES,
-    LAW_COLORS,
+    Curve,
     fig_accuracy_cost,
     fig_f0_ranges,
     fig_frc,
@@ -29,7 +30,6 @@ from workflows.plots_data import (  # noqa: E402
     fig_max_shift_vs_n,
     fig_q_vs_f0,
     fig_shift_curves,
-    fig_shift_ppc,
     law_color,
 )
 from workflows.plots_inference import (  # noqa: E402
@@ -41,13 +41,14 @@ from workflows.plots_inference import (  # noqa: E402
     fig_rank,
     posterior_columns,
 )
+from workflows.plots_ppc import ShiftPanel, fig_shift_ppc  # noqa: E402
 
 __all__ = [
     "save_figure",
     "FORMATS",
-    "LAW_COLORS",
-    "DIRECTION_COLORS",
     "DIRECTION_NAMES",
+    "Curve",
+    "ShiftPanel",
     "TENSION_COLORS",
     "law_color",
     "posterior_columns",

@@ -1,15 +1,17 @@
-"""Figures of the data and of the physics: the paper's Figs. 4-10, FRCs, accuracy vs cost.
+"""Figures of the data and of the physics: the paper's Figs. 4-6, 8 and 10, FRCs, accuracy
+versus cost.
 
 Every function takes plain numpy arrays (SI units unless the docstring says otherwise)
 and returns a :class:`matplotlib.figure.Figure`; none of them knows how the numbers were
-produced. Colours are fixed per contact law and per sweep direction so that a law looks
-the same in every figure of a report.
+produced. Colours, labels and markers come from :mod:`workflows.styles`, so a law looks
+the same in every figure of a report and the data (black) never look like a law.
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import matplotlib
 
@@ -17,69 +19,51 @@ matplotlib.use("Agg")  # headless: figures are only ever written to files
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+
+from workflows import styles  # noqa: E402
 
 __all__ = [
-    "LAW_COLORS",
-    "DIRECTION_COLORS",
     "DIRECTION_NAMES",
+    "Curve",
     "law_color",
+    "new_axes",
+    "directions",
+    "scatter_by_direction",
+    "legend_outside",
+    "binned_trend",
     "fig_shift_curves",
     "fig_max_shift_vs_n",
     "fig_f0_ranges",
-    "fig_shift_ppc",
     "fig_q_vs_f0",
     "fig_inv_q_shift",
     "fig_frc",
     "fig_accuracy_cost",
 ]
 
-# Paper colours where it has them (Hertz red, JKR green, viscoelastic black); the rest
-# from the colour-blind-safe tab palette.
-LAW_COLORS: dict[str, str] = {
-    "hertz": "#d62728",
-    "jkr": "#2ca02c",
-    "viscoelastic": "#000000",
-    "viscoelastic_paper": "#7f7f7f",
-    "dmt": "#9467bd",
-    "powerlaw": "#1f77b4",
-}
-# Paper Fig. 10: grey for up sweeps, orange for down sweeps. Direction 0 = up, 1 = down,
-# as in data.process.ProcessedDataset.drive_direction.
-DIRECTION_COLORS: dict[int, str] = {0: "#7f7f7f", 1: "#ff7f0e"}
-DIRECTION_NAMES: dict[int, str] = {0: "up sweep", 1: "down sweep"}
-
-_FALLBACK = ("#8c564b", "#e377c2", "#17becf", "#bcbd22", "#393b79", "#637939")
+DIRECTION_NAMES = styles.DIRECTION_NAMES
 _SMALL = (5.0, 3.6)
 _X_LABEL = r"$\delta_a/\delta_0$ [-]"
 _SHIFT_LABEL = r"$\Delta f/f_0$ [-]"
 
 
 def law_color(label: str, index: int = 0) -> str:
-    """Colour of a law from its name or label (``"Hertz"``, ``"JKR (γ=0.7)"``, ``"power law"``).
-
-    Matching is on the normalised text so a label and the law name give the same colour;
-    unknown labels cycle through a fallback palette by ``index``.
-    """
-    key = label.lower().replace(" ", "").replace("-", "").replace("_", "")
-    if "paper" in key and "visco" in key:
-        return LAW_COLORS["viscoelastic_paper"]
-    for name in ("viscoelastic", "hertz", "jkr", "dmt"):
-        if name in key:
-            return LAW_COLORS[name]
-    if "visc" in key or "kuwabara" in key or "brilliantov" in key:
-        return LAW_COLORS["viscoelastic"]
-    if "power" in key or "rough" in key:
-        return LAW_COLORS["powerlaw"]
-    return _FALLBACK[index % len(_FALLBACK)]
+    """Colour of a law from its name or label (:func:`workflows.styles.color`); ``index``
+    is accepted for old callers and ignored: a label's colour never depends on order."""
+    del index
+    return styles.color(label)
 
 
-def _new(figsize: tuple[float, float] = _SMALL, ncols: int = 1) -> tuple[Figure, np.ndarray]:
+def new_axes(figsize: tuple[float, float] = _SMALL, ncols: int = 1) -> tuple[Figure, np.ndarray]:
+    """A constrained-layout figure with one row of ``ncols`` axes."""
     fig, axes = plt.subplots(1, ncols, figsize=figsize, squeeze=False, layout="constrained")
     return fig, axes[0]
 
 
-def _directions(direction: np.ndarray | None, n: int) -> np.ndarray:
+def directions(direction: np.ndarray | None, n: int) -> np.ndarray:
+    """Sweep directions as ints (0 up, 1 down); all up when ``direction`` is None."""
     if direction is None:
         return np.zeros(n, dtype=int)
     d = np.asarray(direction).astype(int)
@@ -88,106 +72,185 @@ def _directions(direction: np.ndarray | None, n: int) -> np.ndarray:
     return d
 
 
-def _scatter_by_direction(ax, x: np.ndarray, y: np.ndarray, direction: np.ndarray) -> None:
+def scatter_by_direction(ax: Axes, x: np.ndarray, y: np.ndarray, direction: np.ndarray, *,
+                         size: float = 16, alpha: float = 0.85, zorder: float = 5,
+                         label: bool = True) -> None:
+    """Measured points, up sweeps as filled ▲ and down sweeps as open ▽, over everything."""
     for d in np.unique(direction):
         sel = (direction == d) & np.isfinite(x) & np.isfinite(y)
-        ax.scatter(x[sel], y[sel], s=12, alpha=0.8, color=DIRECTION_COLORS.get(int(d), "k"),
-                   label=DIRECTION_NAMES.get(int(d), f"direction {d}"), zorder=3)
+        st = styles.DIRECTION_STYLES.get(int(d), styles.DIRECTION_STYLES[0])
+        ax.scatter(x[sel], y[sel], s=size, alpha=alpha, marker=st["marker"],
+                   facecolors=st["facecolor"], edgecolors=st["edgecolor"], linewidths=0.7,
+                   label=DIRECTION_NAMES.get(int(d), f"direction {d}") if label else None,
+                   zorder=zorder)
 
 
-def fig_shift_curves(x: np.ndarray, curves: Mapping[str, np.ndarray], *,
-                     title: str | None = None) -> Figure:
-    """Theoretical Δf/f0 versus δa/δ0, one curve per law (paper Fig. 4)."""
+def legend_outside(fig: Figure, handles=None, labels=None, *, where: str = "lower center",
+                   ncols: int = 3, fontsize: float = 7, title: str | None = None, **kw):
+    """One figure legend outside every axes (constrained layout makes room for it)."""
+    if handles is None:
+        handles, labels = [], []
+        for ax in fig.axes:
+            for h, lab in zip(*ax.get_legend_handles_labels()):
+                if lab not in labels and not lab.startswith("_"):
+                    handles.append(h)
+                    labels.append(lab)
+    if labels is None:
+        labels = [h.get_label() for h in handles]
+    return fig.legend(handles, labels, loc=f"outside {where}", ncols=ncols, fontsize=fontsize,
+                      title=title, title_fontsize=fontsize, frameon=False, **kw)
+
+
+def binned_trend(x: np.ndarray, y: np.ndarray, *, bins: int = 8, log: bool = True,
+                 min_count: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Median and interquartile range of ``y`` in ``bins`` bins of ``x`` (log-spaced with
+    ``log``): (bin centre, median, q25, q75); bins with fewer than ``min_count`` points
+    are left out."""
     x = np.asarray(x, dtype=float)
-    fig, (ax,) = _new()
-    styles = itertools.cycle(["-", "--", ":", "-."])
-    for i, (label, y) in enumerate(curves.items()):
-        ax.plot(x, np.asarray(y, dtype=float), next(styles), color=law_color(label, i),
-                lw=1.6, label=label)
+    y = np.asarray(y, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(y) & ((x > 0) if log else True)
+    x, y = x[ok], y[ok]
+    empty = (np.array([]),) * 4
+    if x.size < min_count or np.ptp(x) == 0:
+        return empty
+    edges = (np.geomspace(x.min(), x.max(), bins + 1) if log
+             else np.linspace(x.min(), x.max(), bins + 1))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    rows = []
+    for b in range(bins):
+        v = y[idx == b]
+        if v.size >= min_count:
+            c = np.sqrt(edges[b] * edges[b + 1]) if log else 0.5 * (edges[b] + edges[b + 1])
+            rows.append((c, *np.percentile(v, [50, 25, 75])))
+    if not rows:
+        return empty
+    a = np.array(rows)
+    return a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One curve of :func:`fig_shift_curves`: values on the shared x, the model whose
+    colour it takes (None: resolved from its label), its line style, an optional band."""
+
+    y: np.ndarray
+    model: str | None = None
+    linestyle: str = "-"
+    band: tuple[np.ndarray, np.ndarray] | None = None
+    width: float = 1.6
+
+
+def _coincident_groups(curves: list[tuple[str, Curve]]) -> list[list[int]]:
+    groups: list[list[int]] = []
+    for i, (_, c) in enumerate(curves):
+        y = np.asarray(c.y, dtype=float)
+        for g in groups:
+            _, first = curves[g[0]]
+            if first.linestyle == c.linestyle and np.allclose(
+                    y, first.y, rtol=1e-6, atol=1e-9 * max(1e-30, np.nanmax(np.abs(y))),
+                    equal_nan=True):
+                g.append(i)
+                break
+        else:
+            groups.append([i])
+    return groups
+
+
+def fig_shift_curves(x: np.ndarray, curves: Mapping[str, np.ndarray | Curve], *,
+                     title: str | None = None) -> Figure:
+    """Δf/f0 versus δa/δ0, one curve per law and rung (paper Fig. 4), fitted laws with
+    their 90 % band.
+
+    Colour names the law, the line style the rung or the source (nominal theory or
+    fit). Curves that coincide (Hertz and the viscoelastic law share one conservative
+    backbone) are drawn in alternating dashes of their colours, so none hides another.
+    """
+    x = np.asarray(x, dtype=float)
+    items = [(lab, c if isinstance(c, Curve) else Curve(np.asarray(c, dtype=float)))
+             for lab, c in curves.items()]
+    fig, (ax,) = new_axes((7.6, 4.0))
+    any_shared = False
+    handles = [None] * len(items)
+    for group in _coincident_groups(items):
+        k = len(group)
+        any_shared |= k > 1
+        for j, i in enumerate(group):
+            lab, c = items[i]
+            col = styles.color(c.model or lab)
+            if c.band is not None:
+                ax.fill_between(x, c.band[0], c.band[1], color=col, alpha=0.15, lw=0)
+            ls = c.linestyle if k == 1 else (j * 4.0, (4.0, 4.0 * (k - 1)))
+            ax.plot(x, np.asarray(c.y, dtype=float), color=col, ls=ls, lw=c.width)
+            # the legend shows each curve's own style, not its share of the dashes
+            handles[i] = Line2D([], [], color=col, ls=c.linestyle, lw=c.width,
+                                label=styles.tex(lab) + (" (coincides)" if k > 1 else ""))
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_xlabel(_X_LABEL)
     ax.set_ylabel(_SHIFT_LABEL)
     ax.set_xlim(x.min(), x.max())
-    ax.legend(fontsize=8)
-    ax.set_title(title or "First-order frequency shift per contact law", fontsize=10)
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+              borderaxespad=0, frameon=False,
+              title="coinciding curves: alternating dashes" if any_shared else None,
+              title_fontsize=7)
+    ax.set_title(title or "Frequency shift per contact law: theory and fits", fontsize=10)
     return fig
 
 
-def fig_max_shift_vs_n(n: np.ndarray, shift: np.ndarray) -> Figure:
-    """Maximum shift Δf/f0 at δa = δ0 versus the force exponent n (paper Fig. 5)."""
+def fig_max_shift_vs_n(n: np.ndarray, shift: np.ndarray, backbone: np.ndarray | None = None,
+                       *, fitted: tuple[float, float, float] | None = None,
+                       model: str = "powerlaw") -> Figure:
+    """Shift Δf/f0 at δa = δ0 versus the force exponent n (paper Fig. 5).
+
+    ``shift``: the paper's first-order average (zero at n = 1 and 2, positive beyond 2:
+    "hardening"); ``backbone``: the exact conservative backbone, which softens for every
+    n > 1. ``fitted`` = (median, lo, hi) of the power-law fit's n, drawn as a line and
+    its interval.
+    """
     n = np.asarray(n, dtype=float)
-    fig, (ax,) = _new()
-    ax.plot(n, np.asarray(shift, dtype=float), color=LAW_COLORS["powerlaw"], lw=1.6)
+    fig, (ax,) = new_axes((5.6, 3.8))
+    col = styles.color(model)
+    ax.plot(n, np.asarray(shift, dtype=float), color=col, lw=1.6,
+            ls=styles.RUNG_LINESTYLES["first_order"], label="first order (the paper's)")
+    if backbone is not None:
+        ax.plot(n, np.asarray(backbone, dtype=float), color=col, lw=1.8,
+                ls=styles.RUNG_LINESTYLES["backbone"], label="exact backbone")
     ax.axhline(0.0, color="k", lw=0.5)
     for n_mark, name in ((1.5, "Hertz, n = 3/2"), (2.0, "n = 2")):
         if n.min() <= n_mark <= n.max():
-            ax.axvline(n_mark, color=law_color(name), ls=":", lw=1.0)
-            ax.annotate(name, (n_mark, 0.0), xytext=(3, 4), textcoords="offset points",
-                        fontsize=8, rotation=90, va="bottom")
+            ax.axvline(n_mark, color="0.5", ls=":", lw=1.0)
+            ax.annotate(name, (n_mark, 1.0), xycoords=("data", "axes fraction"),
+                        xytext=(3, -4), textcoords="offset points", fontsize=7, rotation=90,
+                        va="top")
+    if fitted is not None:
+        med, lo, hi = fitted
+        ax.axvspan(lo, hi, color=col, alpha=0.25, lw=0,
+                   label=f"fitted $n$ = {med:.3g} [{lo:.3g}, {hi:.3g}] (90 %)")
+        ax.axvline(med, color=col, lw=1.0)
     ax.set_xlabel(r"force exponent $n$ in $F = C\,\delta^n$ [-]")
     ax.set_ylabel(r"$\Delta f/f_0$ at $\delta_a = \delta_0$ [-]")
-    ax.set_title("Maximum first-order shift versus exponent", fontsize=10)
+    ax.legend(fontsize=7, loc="lower left")
+    ax.set_title("Shift at contact loss versus exponent", fontsize=10)
     return fig
 
 
-def fig_f0_ranges(f0_measured: np.ndarray,
-                  ranges: Mapping[str, tuple[float, float]]) -> Figure:
-    """Measured linear resonances [Hz] per protocol against each law's range (paper Fig. 6)."""
+def fig_f0_ranges(f0_measured: np.ndarray, ranges: Mapping[str, tuple[float, float]], *,
+                  protocol_ids: Sequence[str] | None = None) -> Figure:
+    """Measured linear resonances [Hz] per protocol against each law's range (paper Fig. 6).
+
+    The legend sits below the axes, so no protocol is hidden under it."""
     f0 = np.asarray(f0_measured, dtype=float)
-    fig, (ax,) = _new()
-    for i, (label, (lo, hi)) in enumerate(ranges.items()):
-        ax.axhspan(lo / 1e3, hi / 1e3, color=law_color(label, i), alpha=0.2,
-                   label=f"{label}: {lo / 1e3:.3f}-{hi / 1e3:.3f} kHz")
-    ax.plot(np.arange(1, f0.size + 1), f0 / 1e3, "o", color="k", ms=4,
-            label="measured $f_0$")
+    fig, (ax,) = new_axes((6.0, 3.8))
+    for label, (lo, hi) in ranges.items():
+        ax.axhspan(lo / 1e3, hi / 1e3, color=styles.color(label), alpha=0.25, lw=0,
+                   label=f"{styles.tex(label)}: {lo / 1e3:.3f}-{hi / 1e3:.3f} kHz")
+    pos = np.arange(1, f0.size + 1)
+    ax.plot(pos, f0 / 1e3, "o", color=styles.DATA_COLOR, ms=4, label="measured $f_0$")
+    if protocol_ids is not None and len(protocol_ids) == f0.size:
+        ax.set_xticks(pos, list(protocol_ids), rotation=90, fontsize=6)
     ax.set_xlabel("protocol [-]")
     ax.set_ylabel(r"linear resonance $f_0$ [kHz]")
-    ax.legend(fontsize=8)
+    legend_outside(fig, ncols=min(3, len(ranges) + 1))
     ax.set_title("Measured linear resonances and predicted ranges", fontsize=10)
-    return fig
-
-
-def fig_shift_ppc(x: np.ndarray, shift: np.ndarray, direction: np.ndarray | None,
-                  x_grid: np.ndarray,
-                  bands: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]], *,
-                  log: bool = False) -> Figure:
-    """Posterior predictive Δf/f0 versus δa/δ0 with 90 % bands (paper Figs. 7 and 9).
-
-    ``bands[label] = (q05, q50, q95)`` on ``x_grid``. With ``log=True`` both axes are
-    logarithmic and −Δf/f0 is plotted (the shift is a softening); points and band parts
-    that are not negative shifts cannot be shown there and are left out.
-    """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(shift, dtype=float)
-    xg = np.asarray(x_grid, dtype=float)
-    d = _directions(direction, x.size)
-    sign = -1.0 if log else 1.0
-    fig, (ax,) = _new()
-    for i, (label, (q05, q50, q95)) in enumerate(bands.items()):
-        lo, mid, hi = (sign * np.asarray(q, dtype=float) for q in (q05, q50, q95))
-        lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
-        if log:
-            floor = np.nan
-            lo = np.where(lo > 0, lo, np.where(hi > 0, hi * 1e-3, floor))
-            hi = np.where(hi > 0, hi, floor)
-            mid = np.where(mid > 0, mid, np.nan)
-        c = law_color(label, i)
-        ax.fill_between(xg, lo, hi, color=c, alpha=0.2, lw=0)
-        ax.plot(xg, mid, color=c, lw=1.5, label=f"{label} (median, 90 % band)")
-    if log:
-        keep = (y < 0) & (x > 0)
-        _scatter_by_direction(ax, x[keep], -y[keep], d[keep])
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_ylabel(r"$-\Delta f/f_0$ [-]")
-    else:
-        _scatter_by_direction(ax, x, y, d)
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel(_SHIFT_LABEL)
-    ax.set_xlabel(_X_LABEL)
-    ax.legend(fontsize=7)
-    ax.set_title("Posterior predictive frequency shift" + (" (log-log)" if log else ""),
-                 fontsize=10)
     return fig
 
 
@@ -196,27 +259,40 @@ def fig_q_vs_f0(f0: np.ndarray, q: np.ndarray) -> Figure:
     f0 = np.asarray(f0, dtype=float)
     q = np.asarray(q, dtype=float)
     ok = np.isfinite(f0) & np.isfinite(q)
-    fig, (ax,) = _new()
-    ax.plot(f0[ok] / 1e3, q[ok], "o", color="k", ms=4)
+    fig, (ax,) = new_axes()
+    ax.plot(f0[ok] / 1e3, q[ok], "o", color=styles.DATA_COLOR, ms=4)
     ax.set_xlabel(r"linear resonance $f_0$ [kHz]")
     ax.set_ylabel(r"quality factor $Q$ [-]")
     ax.set_title(f"Q of the reference sweeps ({int(ok.sum())} protocols)", fontsize=10)
     return fig
 
 
-def fig_inv_q_shift(x: np.ndarray, dinvq: np.ndarray, direction: np.ndarray | None) -> Figure:
-    """Δ(1/Q) versus δa/δ0 on a log x axis, sweeps coloured by direction (paper Fig. 10)."""
+def fig_inv_q_shift(x: np.ndarray, dinvq: np.ndarray, direction: np.ndarray | None, *,
+                    bins: int = 8) -> Figure:
+    """Δ(1/Q) versus δa/δ0 on a log x axis (paper Fig. 10), with the median and the
+    interquartile range of each sweep direction in ``bins`` log-spaced amplitude bins."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(dinvq, dtype=float)
-    d = _directions(direction, x.size)
+    d = directions(direction, x.size)
     keep = np.isfinite(x) & np.isfinite(y) & (x > 0)
-    fig, (ax,) = _new()
-    _scatter_by_direction(ax, x[keep], y[keep], d[keep])
-    ax.axhline(0.0, color="k", lw=0.5)
+    fig, (ax,) = new_axes((5.6, 4.0))
+    scatter_by_direction(ax, x[keep], y[keep], d[keep], size=10, alpha=0.35, zorder=3)
+    for k, dk in enumerate(np.unique(d[keep])):
+        sel = keep & (d == dk)
+        c, med, q25, q75 = binned_trend(x[sel], y[sel], bins=bins)
+        if not c.size:
+            continue
+        st = styles.DIRECTION_STYLES.get(int(dk), styles.DIRECTION_STYLES[0])
+        c = c * (1.0 + 0.05 * k)  # a small offset keeps the two sets of bars apart
+        ax.errorbar(c, med, yerr=[med - q25, q75 - med], color=st["edgecolor"],
+                    ls=st["ls"], marker=st["marker"], mfc=st["facecolor"], ms=5, lw=1.4,
+                    capsize=2, zorder=6,
+                    label=f"{DIRECTION_NAMES.get(int(dk), dk)}: median per bin (IQR)")
+    ax.axhline(0.0, color="0.5", lw=0.5)
     ax.set_xscale("log")
     ax.set_xlabel(_X_LABEL)
     ax.set_ylabel(r"$\Delta(1/Q)$ [-]")
-    ax.legend(fontsize=8)
+    legend_outside(fig, ncols=2)
     ax.set_title("Amplitude dependence of the inverse Q factor", fontsize=10)
     return fig
 
@@ -236,7 +312,7 @@ def fig_frc(freq: np.ndarray | Sequence[np.ndarray], amp: np.ndarray | Sequence[
         freqs = [np.asarray(freq, dtype=float)] * len(amps)
     else:
         freqs = [np.asarray(f, dtype=float) for f in freq]
-    fig, (ax,) = _new()
+    fig, (ax,) = new_axes()
     cmap = plt.get_cmap("viridis")
     for i, (f, a, lab) in enumerate(zip(freqs, amps, labels)):
         c = cmap(i / max(len(amps) - 1, 1))
@@ -268,7 +344,7 @@ def fig_accuracy_cost(table: Sequence[Mapping[str, float | str]]) -> Figure:
     err_all = np.array([float(r["error"]) for r in table], dtype=float)
     pos = err_all[np.isfinite(err_all) & (err_all > 0)]
     floor = pos.min() / 10 if pos.size else 1e-12
-    fig, (ax,) = _new()
+    fig, (ax,) = new_axes()
     markers = itertools.cycle("osD^v<>p")
     for i, (rung, rows) in enumerate(rungs.items()):
         t = np.array([float(r["time_s"]) for r in rows])

@@ -2,7 +2,8 @@
 
 Inputs are plain numpy arrays or an ``arviz.InferenceData``. The pair and rank plots are
 drawn by hand from the posterior draws: they cost milliseconds, where the generic
-plotting back-ends cost seconds per figure.
+plotting back-ends cost seconds per figure. Colours, labels and symbols:
+:mod:`workflows.styles`.
 """
 
 from __future__ import annotations
@@ -14,8 +15,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-from workflows.plots_data import _new, law_color, plt
+from workflows import styles
+from workflows.plots_data import legend_outside, new_axes, plt
 
 __all__ = [
     "TENSION_COLORS",
@@ -27,8 +30,9 @@ __all__ = [
     "posterior_columns",
 ]
 
-TENSION_COLORS: dict[str, str] = {"shift": "#1f77b4", "q": "#ff7f0e", "joint": "#000000"}
+TENSION_COLORS: dict[str, str] = {k: v["color"] for k, v in styles.TENSION_STYLES.items()}
 _ETA_LABEL = r"$\log_{10}\,\eta$ [$\eta$ in Pa s]"
+_EXTRA = ("#666666", "#997700", "#994455", "#6699CC")  # labels that name no estimate
 
 
 def _tension_kind(label: str) -> str | None:
@@ -43,9 +47,11 @@ def _tension_kind(label: str) -> str | None:
     return None
 
 
-def _tension_color(label: str, index: int) -> str:
+def _tension_style(label: str, index: int) -> dict:
     kind = _tension_kind(label)
-    return TENSION_COLORS[kind] if kind else plt.get_cmap("tab10")(3 + index % 7)
+    if kind:
+        return styles.TENSION_STYLES[kind]
+    return {"color": _EXTRA[index % len(_EXTRA)], "ls": "-.", "lw": 1.4, "fill": False}
 
 
 def fig_eta_tension(samples: Mapping[str, np.ndarray], *,
@@ -54,9 +60,10 @@ def fig_eta_tension(samples: Mapping[str, np.ndarray], *,
 
     ``ranges`` (log10 η bounds) are shaded; by default they are the 90 % intervals of
     the sample sets whose label names the shift or Q, i.e. the shift-implied and the
-    Q-implied viscosity. Disjoint shaded spans are the tension.
+    Q-implied viscosity. Disjoint shaded spans are the tension. Q alone is drawn filled
+    and the joint posterior dashed over it, so neither hides the other when they agree.
     """
-    fig, (ax,) = _new((5.5, 3.6))
+    fig, (ax,) = new_axes((6.0, 4.2))
     arrays = {k: np.asarray(v, dtype=float).ravel() for k, v in samples.items()}
     arrays = {k: v[np.isfinite(v)] for k, v in arrays.items()}
     if ranges is None:
@@ -66,7 +73,8 @@ def fig_eta_tension(samples: Mapping[str, np.ndarray], *,
                 lo, hi = np.quantile(v, [0.05, 0.95])
                 ranges[f"{label}: 90 % interval"] = (float(lo), float(hi))
     for i, (label, (lo, hi)) in enumerate(ranges.items()):
-        ax.axvspan(lo, hi, color=_tension_color(label, i), alpha=0.12, lw=0, label=label)
+        ax.axvspan(lo, hi, color=_tension_style(label, i)["color"], alpha=0.10, lw=0,
+                   label=styles.tex(label))
     finite = [v for v in arrays.values() if v.size]
     if finite:
         allv = np.concatenate(finite)
@@ -76,61 +84,108 @@ def fig_eta_tension(samples: Mapping[str, np.ndarray], *,
     for i, (label, v) in enumerate(arrays.items()):
         if not v.size:
             continue
+        st = _tension_style(label, i)
         q05, q50, q95 = np.quantile(v, [0.05, 0.5, 0.95])
-        ax.hist(v, bins=edges, density=True, histtype="step", lw=1.6,
-                color=_tension_color(label, i),
-                label=f"{label}: {q50:.2f} [{q05:.2f}, {q95:.2f}]")
+        text = f"{styles.tex(label)}: {q50:.2f} [{q05:.2f}, {q95:.2f}]"
+        if st["fill"]:
+            ax.hist(v, bins=edges, density=True, histtype="stepfilled", color=st["color"],
+                    alpha=0.35, lw=0, zorder=2)
+        ax.hist(v, bins=edges, density=True, histtype="step", lw=st["lw"], ls=st["ls"],
+                color=st["color"], label=text, zorder=3 + i)
     ax.set_xlabel(_ETA_LABEL)
     ax.set_ylabel("posterior density [per decade]")
-    ax.legend(fontsize=7)
+    legend_outside(fig, ncols=2, title=r"median [90 % interval] of $\log_{10}\,\eta$")
     ax.set_title("Viscosity from the shift, from Q, and jointly", fontsize=10)
     return fig
+
+
+def _value_text(v: float, e: float) -> str:
+    if not np.isfinite(v):
+        return "n/a"
+    if not np.isfinite(e) or e <= 0:
+        return f"{v:.1f}"
+    digits = max(0, min(6, 1 - int(np.floor(np.log10(e)))))
+    return f"{v:.{digits}f} ± {e:.{digits}f}"
 
 
 def fig_evidence(laws: Sequence[str], logz: Sequence[float], logz_err: Sequence[float],
                  logz2: Sequence[float] | None = None,
                  logz2_err: Sequence[float] | None = None, *,
                  estimators: tuple[str, str] = ("estimator 1", "estimator 2"),
-                 failed: Sequence[bool] | None = None) -> Figure:
-    """log Z per law relative to the best, ± error, for one or two evidence estimators.
+                 failed: Sequence[bool] | None = None, names: Sequence[str] | None = None,
+                 preferred: str | None = None, reference: str | None = None) -> Figure:
+    """log Z per law relative to a reference, ± 1σ, for one or two evidence estimators.
 
-    Plotting log Z − max log Z keeps differences of a few nats readable when the absolute
-    values are in the thousands. Failed laws are drawn in red hatching and labelled.
+    ``names`` gives each entry's model name (``laws``: their labels). The reference (Δ = 0)
+    is ``reference``, else the ``preferred`` law, else the largest log Z. Each value is
+    written beside its point as "Δ ± σ" with as many digits as its error, because most
+    errors are far smaller than a marker. The preferred law is starred; failed laws are
+    shaded and say FAILED under their name. Marker shape names the estimator (legend,
+    in black), colour the law (tick labels).
     """
     n = len(laws)
+    names = list(names) if names is not None else list(laws)
     z1 = np.asarray(logz, dtype=float)
     e1 = np.asarray(logz_err, dtype=float)
-    ref = np.nanmax(z1) if np.isfinite(z1).any() else 0.0
+    ref_name = reference if reference in names else preferred
+    ref_i = names.index(ref_name) if ref_name in names else (
+        int(np.nanargmax(z1)) if np.isfinite(z1).any() else None)
+    ref = z1[ref_i] if ref_i is not None and np.isfinite(z1[ref_i]) else 0.0
     fail = np.zeros(n, bool) if failed is None else np.asarray(failed, bool)
     pos = np.arange(n)
-    fig, (ax,) = _new((max(4.0, 1.1 * n + 2), 3.6))
-    off = 0.12 if logz2 is not None else 0.0
-    colors = [law_color(lab, i) for i, lab in enumerate(laws)]
-    for i in range(n):
-        ax.errorbar(pos[i] - off, z1[i] - ref, yerr=e1[i], fmt="o", color=colors[i],
-                    capsize=3)
+    fig, (ax,) = new_axes((max(5.0, 1.3 * n + 2.5), 4.2))
+    off = 0.14 if logz2 is not None else 0.0
+    cols = [styles.color(nm) for nm in names]
+    sets = [(z1, e1, "o", -off)]
     if logz2 is not None:
         z2 = np.asarray(logz2, dtype=float)
         e2 = np.zeros(n) if logz2_err is None else np.asarray(logz2_err, dtype=float)
+        sets.append((z2, e2, "s", off))
+    for k, (z, e, m, dx) in enumerate(sets):
         for i in range(n):
-            ax.errorbar(pos[i] + off, z2[i] - ref, yerr=e2[i], fmt="s", mfc="none",
-                        color=colors[i], capsize=3)
+            ax.errorbar(pos[i] + dx, z[i] - ref, yerr=e[i], fmt=m, color=cols[i], ms=6,
+                        mfc=cols[i] if k == 0 else "white", capsize=4, elinewidth=1.5,
+                        zorder=3)
+            ax.annotate(_value_text(z[i] - ref, e[i]), (pos[i] + dx, z[i] - ref),
+                        xytext=(6, 6 if k == 0 else -11), textcoords="offset points",
+                        fontsize=6.5, color="0.1", zorder=5,
+                        bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
+                              "alpha": 0.8})
+    if preferred in names:
+        i = names.index(preferred)
+        ax.plot(pos[i] - off, z1[i] - ref, marker="*", ms=15, color=cols[i], mec="k",
+                mew=0.6, ls="none", zorder=4)
+    ax.margins(x=0.12, y=0.14)  # room for the printed values
     ylo, yhi = ax.get_ylim()
-    for i in np.flatnonzero(fail):
-        ax.axvspan(pos[i] - 0.4, pos[i] + 0.4, facecolor="none", edgecolor="red",
-                   hatch="//", lw=0.8)
-        ax.text(pos[i], ylo + 0.05 * (yhi - ylo), "FAILED", color="red", ha="center",
-                fontsize=8, fontweight="bold")
-    ax.axhline(0.0, color="k", lw=0.5)
-    ax.set_xticks(pos, list(laws), rotation=20, fontsize=8)
-    ax.set_ylabel(r"$\log Z - \log Z_{\mathrm{best}}$ [nats]")
-    # Marker shape names the estimator; colour names the law (shown on the x axis).
+    errs = np.concatenate([e[np.isfinite(e)] for _, e, _, _ in sets])
+    if errs.size and errs.max() < 0.01 * (yhi - ylo):  # under ~2 pt on a 4 in axis
+        ax.text(0.01, 0.98, "1σ error bars are smaller than the markers: see the printed "
+                "values", transform=ax.transAxes, fontsize=7, va="top", color="0.3")
+    for i in np.flatnonzero(fail):  # light, behind the points: the values stay legible
+        ax.axvspan(pos[i] - 0.4, pos[i] + 0.4, facecolor="#fbe3e3", edgecolor="#e8a0a0",
+                   hatch="//", lw=0.0, zorder=0)
+    ax.axhline(0.0, color="0.4", lw=0.6)
+    ticks = [styles.tex(t) + (" ★" if nm == preferred else "") + ("\nFAILED" if f else "")
+             for t, nm, f in zip(laws, names, fail)]
+    ax.set_xticks(pos, ticks, rotation=20, ha="right", fontsize=8)
+    for t, c, nm in zip(ax.get_xticklabels(), cols, names):
+        t.set_color(c)
+        if nm == preferred:
+            t.set_fontweight("bold")
+    ref_name = laws[ref_i] if ref_i is not None else "best"
+    ax.set_ylabel(r"$\log Z - \log Z_\mathrm{ref}$ [nats]")
     handles = [Line2D([], [], marker="o", color="k", ls="none", label=estimators[0])]
     if logz2 is not None:
-        handles.append(Line2D([], [], marker="s", mfc="none", color="k", ls="none",
+        handles.append(Line2D([], [], marker="s", mfc="white", color="k", ls="none",
                               label=estimators[1]))
-    ax.legend(handles=handles, fontsize=7)
-    ax.set_title("Evidence per contact law", fontsize=10)
+    if preferred in names:
+        handles.append(Line2D([], [], ls="none", marker="*", color="k", ms=8,
+                              label="preferred law"))
+    if fail.any():
+        handles.append(Patch(facecolor="#fbe3e3", edgecolor="#e8a0a0", hatch="//",
+                             label="failed its sampling gate"))
+    legend_outside(fig, handles, ncols=3)
+    ax.set_title(f"Evidence per model relative to {styles.tex(ref_name)}", fontsize=10)
     return fig
 
 
@@ -168,7 +223,8 @@ def fig_pair(idata, var_names: Sequence[str], *, units: Mapping[str, str] | None
     """
     names, draws = posterior_columns(idata, var_names)
     units = units or {}
-    labels = [f"{n} [{units[n.split('[')[0]]}]" if n.split("[")[0] in units else n
+    labels = [styles.axis_label(n, units[n.split("[")[0]]) if n.split("[")[0] in units
+              else styles.param_label(n)
               for n in names]
     k = len(names)
     flat = draws.reshape(-1, k)
@@ -233,7 +289,7 @@ def fig_rank(idata, var_names: Sequence[str], *, bins: int = 20) -> Figure:
             counts, _ = np.histogram(ranks[ch], bins=edges)
             ax.stairs(counts, edges, color=cmap(ch % 10), lw=1.2, label=f"chain {ch}")
         ax.axhline(mean, color="k", lw=0.6, ls="--")
-        ax.set_title(names[c], fontsize=9)
+        ax.set_title(styles.param_label(names[c]), fontsize=9)
         ax.set_xlabel("rank of draw (all chains) [-]", fontsize=8)
         ax.set_ylabel("draws per bin [-]", fontsize=8)
         ax.tick_params(labelsize=7)

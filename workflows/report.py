@@ -1,133 +1,289 @@
 """The comparison report: ``report.md`` and a self-contained ``report.html``.
 
-Both are rendered from one list of blocks (headings, paragraphs, tables, figures) built
-from the pipeline's result dictionary, so the two files always say the same thing. The
-HTML embeds every figure as a base64 ``data:`` URI and references no other file: it can
-be mailed or archived on its own. Failed runs are marked in every table and in a banner
-at the top. Optional keys of the result may be missing; the report then says less.
+Both are rendered from one list of blocks (headings, paragraphs, lists, tables, figures)
+built from the pipeline's result dictionary, so the two files always say the same thing.
+The HTML embeds every figure as a base64 ``data:`` URI and references no other file: it
+can be mailed or archived on its own, and printed to PDF without a heading or caption
+torn from its figure. Failed runs are marked in every table and in a banner at the top.
+Optional keys of the result may be missing; the report then says less.
 
-The tables and their number formatting are built in :mod:`workflows.report_tables`;
-:func:`comparison_table`, :func:`markdown_table` and :func:`tension_paragraph` are
-re-exported here. Units: η values in ``tension.eta_*_q05_q50_q95`` are in Pa s; log Z and
+Order: the headline (the preferred law, or the baseline first when it beats every law),
+the warnings a statistician would raise, the comparison, the preferred law's parameters,
+the truth of a synthetic world, the η tension, every law's parameters and priors, the
+data, the sampler diagnostics, the figures, a glossary, timings and the configuration.
+Tables: :mod:`workflows.report_tables`, :mod:`workflows.report_params`,
+:mod:`workflows.report_tension`; renderers: :mod:`workflows.report_render`. log Z and
 elpd in nats.
 """
 
 from __future__ import annotations
 
-import base64
-import html
 import json
 import math
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from workflows._io import write_text
-from workflows.report_tables import (
-    _DASH,
-    _FAILED,
-    _comparison_block,
-    _diag_block,
-    _float,
-    _is_failed,
-    _md_table,
-    _num,
-    _param_block,
-    _tension_table,
-    comparison_table,
-    markdown_table,
-    tension_paragraph,
+from workflows.report_params import (
+    GLOSSARY,
+    glossary_table,
+    param_table,
+    parameter_warnings,
+    priors_table,
+    truth_tables,
 )
+from workflows.report_render import Block, blocks_to_html, blocks_to_markdown
+from workflows.report_tables import (
+    DASH,
+    FAILED,
+    comparison_block,
+    comparison_table,
+    diagnostics_table,
+    exclusions_table,
+    fmt_num,
+    headline,
+    is_failed,
+    law_label,
+    markdown_table,
+    ranking,
+    resolved_config,
+    timings_table,
+    to_float,
+)
+from workflows.report_tension import tension_sentences, tension_table
 
 __all__ = ["render_report", "comparison_table", "markdown_table", "report_blocks",
-           "blocks_to_markdown", "blocks_to_html", "tension_paragraph"]
+           "statistical_warnings", "blocks_to_markdown", "blocks_to_html"]
 
-_MIME = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg",
-         ".jpeg": "image/jpeg", ".gif": "image/gif"}
 
-Block = tuple  # ("h", level, text) | ("p", text) | ("warn", text) | ("code", text)
-#               | ("table", headers, rows, failed_row_flags) | ("fig", path, caption)
+# ------------------------------------------------------------------------------ checks
+def _pit_shape(pit: Mapping) -> str:
+    """What a non-uniform LOO-PIT says, from its tail share and mean against their
+    sampling sd under uniformity (binomial: sqrt(0.1 0.9 / n); mean: sqrt(1/(12 n)))."""
+    n = max(to_float(pit.get("n")), 1.0)
+    z_tails = (to_float(pit.get("tails")) - 0.1) / math.sqrt(0.09 / n)
+    z_mean = (to_float(pit.get("mean")) - 0.5) / math.sqrt(1.0 / (12.0 * n))
+    if z_tails > 2:
+        return "the predictive is too narrow (too many sweeps in its tails)"
+    if z_tails < -2:
+        return "the predictive is too wide (too few sweeps in its tails)"
+    if abs(z_mean) > 2:
+        return ("the data lie above the predictions" if z_mean > 0
+                else "the data lie below the predictions")
+    return "the law's curve misses the data's shape"
+
+
+def statistical_warnings(result: Mapping) -> list[str]:
+    """The warnings of the report's 'Warnings' section, one line each: posteriors against
+    a prior bound or outside the scene's range, miscalibrated LOO-PIT, Pareto k > 0.7,
+    disagreeing evidence estimators."""
+    laws = list(result.get("laws") or [])
+    data = result.get("data") or {}
+    pits = ((result.get("checks") or {}).get("loo_pit") or {})
+    out: list[str] = []
+    for lw in laws:
+        label = law_label(lw)
+        out += parameter_warnings(lw, data.get("young_range_Pa"))
+        pit = pits.get(lw.get("name")) or {}
+        if pit.get("calibrated") is False:
+            out.append(f"{label}: the LOO-PIT of the shift is not uniform (Kolmogorov-Smirnov "
+                       f"D = {fmt_num(pit.get('ks_d'), '.2f')}, p = "
+                       f"{fmt_num(pit.get('ks_p'), '.2g')}; "
+                       f"{100 * to_float(pit.get('tails')):.0f} % of the values in the outer "
+                       f"5 % tails against 10 %): {_pit_shape(pit)}.")
+        bad = to_float(lw.get("pareto_k_bad"))
+        if bad > 0:
+            n = (lw.get("loo") or {}).get("n_points")
+            of = f" of {n}" if n else ""
+            one = bad == 1
+            out.append(f"{label}: {bad:.0f}{of} drive sweeps {'has' if one else 'have'} "
+                       f"Pareto k > 0.7, so PSIS-LOO is unreliable for {'it' if one else 'them'}"
+                       " and elpd_loo is biased (such sweeps dominate the fit; refit without "
+                       "them or use K-fold CV).")
+        if lw.get("evidence_agree") is False:
+            out.append(f"{label}: the two evidence estimators disagree beyond their errors "
+                       "(log Z is not settled).")
+    return out
+
+
+def _no_warnings(result: Mapping) -> str:
+    """What was checked and found fine (only what was checked)."""
+    done = ["no posterior against a prior bound or outside the scene's range",
+            "every Pareto k ≤ 0.7"]
+    pits = (result.get("checks") or {}).get("loo_pit")
+    done.append("LOO-PIT uniform for every law" if pits else "LOO-PIT not computed")
+    return "None: " + "; ".join(done) + "."
 
 
 # ----------------------------------------------------------------------------- blocks
+def _data_blocks(data: Mapping) -> list[Block]:
+    b: list[Block] = [("h", 2, "Data")]
+    rule = data.get("two_percent_rule")
+    b.append(("table", ["item", "value"], [
+        ["source", str(data.get("source", DASH))], ["scene", str(data.get("scene") or DASH)],
+        ["hash", str(data.get("hash", DASH))],
+        ["protocols", fmt_num(data.get("n_protocols"), ".0f")],
+        ["drive sweeps used", fmt_num(data.get("n_drive"), ".0f")],
+        ["drive sweeps excluded", fmt_num(data.get("n_excluded"), ".0f")],
+        ["2 % rule", DASH if rule is None else ("on" if rule else "off")],
+        ["shift relative to", f"the {data['shift_reference']} reference"
+         if data.get("shift_reference") else DASH],
+        ["synthetic (ground truth known)", "yes" if data.get("synthetic") else "no"]],
+        [False] * 9))
+    excluded = data.get("excluded") or []
+    if excluded:
+        b.append(("p", "Excluded drive sweeps, per protocol. The 2 % rule: once a reference "
+                       "sweep's linear resonance has drifted by more than 2 % from the "
+                       "protocol's first, the contact has changed and the later drive sweeps "
+                       "of that protocol are dropped."))
+        b.append(("table", *exclusions_table(excluded)))
+    elif data.get("n_excluded"):
+        b.append(("p", f"{data['n_excluded']} drive sweeps were excluded (no detail recorded)."))
+    else:
+        b.append(("p", "No drive sweep was excluded."))
+    return b
+
+
+def _truth_blocks(result: Mapping, laws: Sequence[Mapping]) -> list[Block]:
+    data = result.get("data") or {}
+    truth = data.get("truth")
+    if not data.get("synthetic") or not isinstance(truth, Mapping):
+        return []
+    b: list[Block] = [("h", 2, "Truth of the synthetic world"),
+                      ("p", f"World `{truth.get('world', '?')}` ({truth.get('kind') or '?'}, "
+                            f"seed {truth.get('seed', '?')}): the values it was generated "
+                            "with, where it defines one for a fitted parameter.")]
+    table, none = truth_tables(truth, laws)
+    if table[1]:
+        b.append(("table", *table))
+    if none:
+        b.append(("p", "No truth in this world for:"))
+        b.append(("ul", none))
+    per = result.get("truth_protocols") or {}
+    by_name = {lw.get("name"): lw for lw in laws}
+    rows = []
+    for key, label, unit, scale in (("delta0", "δ0_p", "nm", 1e9), ("f0", "f0_p", "Hz", 1.0),
+                                    ("q", "Q_p", "–", 1.0)):
+        e = per.get(key)
+        if not e:
+            continue
+        lo, hi = (to_float(v) * scale for v in e.get("range", (math.nan, math.nan)))
+        meas = e.get("measured_rel_error_max")
+        fits = "; ".join(_coverage(law_label(by_name.get(n, {"name": n})), c)
+                         for n, c in (e.get("laws") or {}).items())
+        rows.append([label, unit, f"{lo:.4g}-{hi:.4g}",
+                     DASH if meas is None else f"≤ {_pct(meas)} off", fits or DASH])
+    if rows:
+        b.append(("p", "Per protocol: the truth's range over the protocols, how far the "
+                       "measured values lie from it (the models condition on the measured "
+                       "f0), and how many protocols' 90 % posterior intervals hold it."))
+        b.append(("table", ["quantity", "unit", "truth (range)", "measured", "fits"], rows,
+                  [False] * len(rows)))
+    return b
+
+
+def _pct(frac: object) -> str:
+    """A relative error as a percentage with two significant digits (no exponent)."""
+    v = 100 * to_float(frac)
+    return DASH if not math.isfinite(v) else (f"{v:.0f} %" if v >= 10 else f"{v:.2g} %")
+
+
+def _coverage(label: str, c: Mapping) -> str:
+    text = f"{label}: median ≤ {_pct(c.get('median_rel_error_max'))} off"
+    width = to_float(c.get("rel_width_median"))
+    if math.isfinite(width) and width < 1e-3:
+        # a deterministic function of the data: nothing to cover
+        return text + " (fixed by the measured f0_p: its posterior has no width)"
+    return text + f", {c.get('covered')}/{c.get('n')} inside the 90 % intervals"
+
+
+def _tension_blocks(result: Mapping) -> list[Block]:
+    main = result.get("tension")
+    if not main:
+        return []
+    truth = (result.get("data") or {}).get("truth") or {}
+    eta_truth = ((truth.get("values") or {}).get("eta_shift") or {}).get("value") \
+        if isinstance(truth, Mapping) else None
+    b: list[Block] = [("h", 2, "Viscosity tension: shift versus Q"),
+                      ("p", "Does one viscosity η explain both the amplitude-dependent shift "
+                            "and the linear Q? η from each observable alone, from both with "
+                            "one η, and from both with a separate η for each (the split model).")]
+    for t in (main, main.get("paper")):
+        if not t:
+            continue
+        b.append(("h", 3, f"Forward model (rung) `{t.get('rung', '?')}`"))
+        bad = [k for k, ok in (t.get("fits_ok") or {}).items() if not ok]
+        if bad:
+            b.append(("warn", f"{FAILED}: the {', '.join(bad)} fit(s) of this block failed "
+                              "their diagnostics; read its numbers with care."))
+        b.append(("table", *tension_table(t, eta_truth)))
+        b.append(("p", tension_sentences(t)))
+    return b
+
+
 def report_blocks(result: Mapping) -> list[Block]:
     """The report as a list of blocks, shared by the Markdown and HTML renderers."""
     b: list[Block] = [("h", 1, result.get("title") or "beadrod model comparison")]
-    meta = [f"beadrod {result.get('beadrod_version', '?')}",
-            f"created {result.get('created', '?')}"]
-    b.append(("p", " · ".join(meta)))
-    laws = list(result.get("laws", []))
-    failed = [lw for lw in laws if _is_failed(lw)]
-    for lw in failed:
-        why = "; ".join(map(str, lw.get("failures") or [])) or "no reason recorded"
-        b.append(("warn", f"{_FAILED}: {lw.get('label', lw.get('name'))} — {why}. "
-                          "Its numbers below are not trustworthy."))
-    data = result.get("data") or {}
-    synthetic = bool(data.get("synthetic"))
-    b.append(("h", 2, "Data"))
-    b.append(("table", ["item", "value"], [
-        ["source", str(data.get("source", _DASH))], ["hash", str(data.get("hash", _DASH))],
-        ["protocols", _num(data.get("n_protocols"), ".0f")],
-        ["drive sweeps used", _num(data.get("n_drive"), ".0f")],
-        ["rows excluded", _num(data.get("n_excluded"), ".0f")],
-        ["synthetic (ground truth known)", "yes" if synthetic else "no"]], [False] * 6))
-
-    b.append(("h", 2, "Preferred law"))
-    by_name = {lw.get("name"): lw for lw in laws}
-    pref = by_name.get(result.get("preferred"))
-    if pref is None:
-        b.append(("warn", "No preferred law: " + (result.get("preferred_reason")
-                                                  or "no law was selected.")))
-    else:
-        text = f"**{pref.get('label', pref.get('name'))}**"
-        if result.get("preferred_reason"):
-            text += f": {result['preferred_reason']}"
-        b.append(("p", text))
-        if _is_failed(pref):
-            b.append(("warn", f"The preferred law's run is marked {_FAILED}."))
-        b.append(("table", *_param_block(pref, data.get("truth"), synthetic)))
+    b.append(("p", f"beadrod {result.get('beadrod_version', '?')} · "
+                   f"created {result.get('created', '?')}"))
+    b += list(headline(result))
+    laws = list(result.get("laws") or [])
+    failed = [lw for lw in laws if is_failed(lw)]
+    if failed:
+        whys = [f"{law_label(lw)} ("
+                + ("; ".join(map(str, lw.get("failures") or [])) or "no reason recorded") + ")"
+                for lw in failed]
+        b.append(("warn", f"{FAILED}: {len(failed)} of {len(laws)} fits failed their sampling "
+                          "gate, and their numbers below are not trustworthy: "
+                          + "; ".join(whys) + "."))
+    warns = statistical_warnings(result)
+    b.append(("h", 2, "Warnings"))
+    b += [("caution", w) for w in warns] or [("p", _no_warnings(result))]
 
     b.append(("h", 2, "Evidence and LOO"))
-    b.append(("table", *_comparison_block(result)))
-    b.append(("p", "log Z in nats ± the estimator's own error; Δ log Z against the best "
-                   "successful law (errors in quadrature); elpd_loo ± its standard error."))
-    laws = result.get("laws") or []
+    b.append(("table", *comparison_block(result)))
+    b.append(("p", "log Z: log evidence in nats ± the estimator's own error. Δ log Z: against "
+                   "the preferred law (errors in quadrature); the baseline's row is positive "
+                   "where it beats it. elpd_loo: expected log predictive density of the drive "
+                   "sweeps by Pareto-smoothed leave-one-out ± its standard error; Pareto "
+                   "k > 0.7 marks sweeps where that estimate is unreliable."))
     if laws and not any(lw.get("log_z2_method") for lw in laws):
         b.append(("p", "One evidence estimator only, no cross-check: run again with "
                        "`--evidence bridge,ns` to add nested sampling (jaxns) beside bridge "
                        "sampling; the table then says whether the two agree."))
 
-    if result.get("tension"):
-        b.append(("h", 2, "Viscosity tension: shift versus Q"))
-        main = result["tension"]
-        for t in (main.get("paper"), main):
-            if not t:
-                continue
-            b.append(("h", 3, f"Forward model: {t.get('rung', '?')}"))
-            bad = [k for k, ok in (t.get("fits_ok") or {}).items() if not ok]
-            if bad:
-                b.append(("warn", f"{_FAILED}: the {', '.join(bad)} fit(s) of this block failed "
-                                  "their diagnostics; read its numbers with care."))
-            b.append(("p", t.get("paragraph") or tension_paragraph(t)))
-            headers, body, flags = _tension_table(t)
-            if body:
-                b.append(("table", headers, body, flags))
+    truth = (result.get("data") or {}).get("truth")
+    truth = truth if isinstance(truth, Mapping) else None
+    pref = next((lw for lw in laws if lw.get("name") == ranking(laws)["best"]), None)
+    if pref is not None and pref.get("params"):
+        b.append(("h", 2, f"Parameters of the preferred law: {law_label(pref)}"))
+        b.append(("table", *param_table(pref, truth)))
+    b += _truth_blocks(result, laws)
+    b += _tension_blocks(result)
 
     b.append(("h", 2, "Parameters of every law"))
+    gl = glossary_table(laws)
+    if gl[1]:
+        b.append(("p", "What each parameter is, and the unit the tables print it in:"))
+        b.append(("table", *gl))
     for lw in laws:
-        title = str(lw.get("label", lw.get("name", "?")))
-        if _is_failed(lw):
-            title += f" — {_FAILED}"
+        title = law_label(lw) + (f" — {FAILED}" if is_failed(lw) else "")
         b.append(("h", 3, title))
-        if _is_failed(lw):
-            b.append(("warn", f"{_FAILED} run: " + ("; ".join(map(str, lw.get("failures")
+        if is_failed(lw):
+            b.append(("warn", f"{FAILED} run: " + ("; ".join(map(str, lw.get("failures")
                                                                     or [])) or "no reason")))
-        if lw.get("params"):
-            b.append(("table", *_param_block(lw, data.get("truth"), synthetic)))
-        else:
-            b.append(("p", "No parameter summary."))
+        b.append(("table", *param_table(lw, truth)) if lw.get("params")
+                 else ("p", "No parameter summary."))
+    pr = priors_table(laws)
+    if pr[1]:
+        b.append(("h", 2, "Priors"))
+        b.append(("p", "The evidence integrates the likelihood over these priors, so they are "
+                       "part of every log Z above."))
+        b.append(("table", *pr))
+
+    b += _data_blocks(result.get("data") or {})
     b.append(("h", 2, "Sampler diagnostics"))
-    b.append(("table", *_diag_block(laws)))
+    b.append(("table", *diagnostics_table(laws)))
 
     figures = list(result.get("figures") or [])
     if figures:
@@ -136,106 +292,22 @@ def report_blocks(result: Mapping) -> list[Block]:
         for f in figures:
             sections.setdefault(str(f.get("section") or "Other"), []).append(f)
         for name, figs in sections.items():
-            b.append(("h", 3, name))
+            b.append(("h", 3, name[:1].upper() + name[1:]))
             b += [("fig", str(f["path"]), str(f.get("caption", ""))) for f in figs]
 
+    b.append(("h", 2, "Glossary"))
+    b.append(("ul", [f"**{k}**: {v}" for k, v in GLOSSARY.items()]))
     timings = result.get("timings") or {}
     if timings:
-        b.append(("h", 2, "Timings"))
-        rows = [[str(k), _num(v, ".1f")] for k, v in timings.items()]
-        total = sum(_float(v) for v in timings.values() if math.isfinite(_float(v)))
-        rows.append(["total", f"{total:.1f}"])
-        b.append(("table", ["stage", "seconds"], rows, [False] * len(rows)))
+        table, note = timings_table(timings)
+        b += [("h", 2, "Timings"), ("table", *table), ("p", note)]
     if result.get("config") is not None:
         b.append(("h", 2, "Configuration"))
-        b.append(("code", json.dumps(result["config"], indent=2, sort_keys=True, default=str)))
+        b.append(("p", "As resolved for this run (defaults filled in); config.resolved.toml "
+                       "holds the same."))
+        b.append(("code", json.dumps(resolved_config(result), indent=2, sort_keys=True,
+                                     default=str)))
     return b
-
-
-# -------------------------------------------------------------------------- renderers
-def blocks_to_markdown(blocks: Sequence[Block]) -> str:
-    """Markdown; figures are linked by their path relative to the report."""
-    out: list[str] = []
-    for blk in blocks:
-        kind = blk[0]
-        if kind == "h":
-            out.append("#" * blk[1] + " " + blk[2])
-        elif kind == "p":
-            out.append(blk[1])
-        elif kind == "warn":
-            out.append(f"> **⚠ {blk[1]}**")
-        elif kind == "table":
-            out.append(_md_table(blk[1], blk[2]))
-        elif kind == "fig":
-            out.append(f"![{blk[2]}]({blk[1]})\n\n*{blk[2]}*")
-        elif kind == "code":
-            out.append("```json\n" + blk[1] + "\n```")
-    return "\n\n".join(out) + "\n"
-
-
-_CSS = """body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;
-color:#222;line-height:1.45}table{border-collapse:collapse;margin:1em 0;font-size:.9em}
-th,td{border:1px solid #bbb;padding:.25em .6em;text-align:left}th{background:#eee}
-tr.failed td{background:#fdd;color:#900}strong.failed{color:#c00}
-.warn{border:2px solid #c00;background:#fee;color:#900;padding:.6em 1em;font-weight:bold}
-figure{margin:1.5em 0}img{max-width:100%}figcaption{font-style:italic;font-size:.9em}
-pre{background:#f6f6f6;padding:.8em;overflow:auto;font-size:.8em}.missing{color:#c00}"""
-
-
-def _inline(text: str) -> str:
-    """Escape, then turn ``**bold**`` into <strong> (FAILED gets the warning colour)."""
-    esc = html.escape(str(text))
-
-    def bold(m: re.Match) -> str:
-        inner = m.group(1)
-        cls = ' class="failed"' if _FAILED in inner or inner == "NO" else ""
-        return f"<strong{cls}>{inner}</strong>"
-
-    return re.sub(r"\*\*(.+?)\*\*", bold, esc)
-
-
-def _data_uri(path: Path) -> str | None:
-    if path.suffix.lower() not in _MIME and path.with_suffix(".png").is_file():
-        path = path.with_suffix(".png")
-    if not path.is_file() or path.suffix.lower() not in _MIME:
-        return None
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f"data:{_MIME[path.suffix.lower()]};base64,{data}"
-
-
-def blocks_to_html(blocks: Sequence[Block], base_dir: Path) -> str:
-    """Self-contained HTML: figures read from ``base_dir`` and embedded as data URIs."""
-    title = next((blk[2] for blk in blocks if blk[0] == "h"), "beadrod report")
-    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-           f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>"]
-    for blk in blocks:
-        kind = blk[0]
-        if kind == "h":
-            out.append(f"<h{blk[1]}>{_inline(blk[2])}</h{blk[1]}>")
-        elif kind == "p":
-            out.append(f"<p>{_inline(blk[1])}</p>")
-        elif kind == "warn":
-            out.append(f'<p class="warn">⚠ {_inline(blk[1])}</p>')
-        elif kind == "table":
-            _, headers, body, flags = blk
-            rows = ["<tr>" + "".join(f"<th>{_inline(h)}</th>" for h in headers) + "</tr>"]
-            for row, bad in zip(body, flags):
-                cls = ' class="failed"' if bad else ""
-                rows.append(f"<tr{cls}>" + "".join(f"<td>{_inline(c)}</td>" for c in row)
-                            + "</tr>")
-            out.append("<table>" + "\n".join(rows) + "</table>")
-        elif kind == "fig":
-            uri = _data_uri(base_dir / blk[1])
-            cap = _inline(blk[2])
-            if uri is None:
-                out.append(f'<p class="missing">Figure missing: {html.escape(blk[1])}</p>')
-            else:
-                out.append(f'<figure><img src="{uri}" alt="{html.escape(blk[2])}">'
-                           f"<figcaption>{cap}</figcaption></figure>")
-        elif kind == "code":
-            out.append(f"<pre>{html.escape(blk[1])}</pre>")
-    out.append("</body></html>")
-    return "\n".join(out) + "\n"
 
 
 def render_report(result: Mapping, out_dir: str | Path) -> tuple[Path, Path]:

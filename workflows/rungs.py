@@ -17,13 +17,9 @@ from pathlib import Path
 from typing import Any
 
 from ._io import write_json, write_text
+from .config import RUNGS
 
 __all__ = ["RUNGS", "check_rungs", "run_rungs", "rung_tables"]
-
-# inference.numpyro_models.RUNGS, spelled out so that the CLI builds its parsers without
-# importing inference (which starts the JAX backend before the host device count is set);
-# tests/test_cli.py checks the two agree
-RUNGS = ("first_order", "backbone", "paper_eq25")
 
 
 def check_rungs(rungs: list[str]) -> None:
@@ -38,28 +34,32 @@ def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any
     ``out/<rung>/`` (as compare does: NUTS, gate, LOO, evidence) and write
     ``rungs.md``, ``rungs.csv`` and ``rungs.json`` into ``out``. Returns the JSON dict."""
     from inference.likelihood import model_inputs
+    from models.registry import get_law
 
+    from .comparison import JOBS, job_steps, model_specs, n_devices
     from .parallel import Job, resolve_workers, run_jobs
-    from .pipeline import MODEL_SPECS, comparison_specs, load_data, preferred_law
+    from .pipeline import default_model_names, load_data, preferred_law
+    from .progress import RunProgress
 
     check_rungs(rungs)
     t0 = time.perf_counter()
     ds = load_data(cfg)
     inputs = model_inputs(ds)
-    names = cfg["laws"] or [n for n in MODEL_SPECS if n != "baseline"]
-    lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
+    # default: every law of the default comparison that has all the rungs asked for (a law
+    # named with --laws that lacks one is refused by comparison_specs, never swapped)
+    names = cfg["laws"] or [n for n in default_model_names() if n != "baseline"
+                            and set(rungs) <= set(get_law(n).rungs)]
     jobs, same = [], {}
     for rung in rungs:
-        for name, spec in comparison_specs(names, rung, lik).items():
+        for name, spec in model_specs(cfg, names, rung).items():
             first = next((j for j in jobs if j.name == name and j.spec == spec), None)
             if first is not None:  # the same model: fit once
                 same[(rung, name)] = first.key
                 continue
             jobs.append(Job(f"{rung}:{name}", "fit", name, spec, cfg, str(Path(out) / rung)))
-    done = run_jobs(jobs, workers=resolve_workers(cfg["workers"], len(jobs)), ds=ds,
-                    inputs=inputs, resume=False, log_dir=Path(out),
-                    quiet=bool(cfg.get("quiet")),
-                    n_devices=max(1, min(int(cfg["sampling"]["chains"]), 8)))
+    with RunProgress(sum(job_steps(j) for j in jobs), len(jobs), what="fits"):
+        done = run_jobs(jobs, runner=JOBS, workers=resolve_workers(cfg["workers"], len(jobs)),
+                        ds=ds, inputs=inputs, resume=False, n_devices=n_devices(cfg))
     fits = {}
     for rung in rungs:
         for name in names:

@@ -1,0 +1,280 @@
+"""The contact-law object: everything the project knows about one law, in one place.
+
+A law is a :class:`ContactLaw` built in the law's own module (``models/hertz.py`` holds
+``LAW``, and so on) and listed once, in :mod:`models.registry`. It carries
+
+* its parameters (:class:`Param`: name, unit, label, prior, description);
+* its force ``F(delta; theta, scene)`` [N], a JAX-traceable function of the overlap
+  delta [m] and keyword parameters (law parameters and scene quantities by name);
+* optional fast paths: closed forms or tables of the static overlap, of the overlap a
+  measured resonance implies, and of the shift at a rung. Anything not given is
+  computed by the generic numerics of :mod:`models.generic` from the force alone;
+* its linear Q where it has a loss channel, its rungs and its reference.
+
+Keyword conventions. Every function of a law receives the *resolved* keywords of
+:meth:`ContactLaw.resolve`: the scene quantities of :data:`SCENE_KEYS` (``radius`` [m],
+``young`` [Pa], ``poisson`` [-], ``e_star`` [Pa], ``load`` [N], ``mass`` [kg],
+``gravity`` [m/s^2], ``roughness_rms`` [m], ``surface_energy`` [J/m^2]) overlaid by the
+law parameters; ``e_star`` = E/(2 (1 - nu^2)) (identical bead and rod) is recomputed from
+``young`` and ``poisson`` unless ``e_star`` is itself a law parameter. Functions take
+what they need by name and ignore the rest (``**_``).
+
+Protocol-to-protocol scatter (remounting the bead). By default the law's stiffness
+scale scatters: F_p = s_p F(delta; theta), so the measured f0_p fixes the static
+overlap through F(delta0)/F'(delta0) = F0/(m omega0_p^2), independently of s_p
+(:func:`models.generic.overlap_from_frequency`: Hertz gives 3 F0/(2 m omega0^2), a power
+law n F0/(m omega0^2)). A law whose scatter enters otherwise overrides
+``overlap_from_frequency`` in its own module and says why there.
+
+Priors are described by :class:`Prior` (``models/`` imports no NumPyro; ``inference``
+turns them into distributions). A law loaded from a user's file may give NumPyro
+distributions directly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import jax.numpy as jnp
+
+__all__ = ["Prior", "Param", "ContactLaw", "SCENE_KEYS", "RungUnavailable", "effective_modulus",
+           "prior_median"]
+
+SCENE_KEYS = ("radius", "young", "poisson", "e_star", "load", "mass", "gravity",
+              "roughness_rms", "surface_energy")
+"""Scene quantities a law function may ask for by name (units in the module docstring)."""
+
+
+class RungUnavailable(ValueError):
+    """The law has no implementation of the requested rung."""
+
+
+def effective_modulus(young: Any, poisson: Any) -> Any:
+    """E* = E / (2 (1 - nu^2)) [Pa] for identical bead and rod (Johnson 1985, Eq. 4.22)."""
+    return young / (2.0 * (1.0 - poisson * poisson))
+
+
+@dataclass(frozen=True)
+class Prior:
+    """A proper prior described without NumPyro.
+
+    ``kind``: 'uniform' (a, b) = bounds; 'loguniform' (a, b) = bounds; 'lognormal'
+    (a, b) = (median, sigma of the log); 'normal' (a, b) = (mean, sd); 'halfnormal'
+    (a,) = scale.
+    """
+
+    kind: str
+    a: float
+    b: float = 0.0
+
+    def median(self) -> float:
+        return {"uniform": lambda: 0.5 * (self.a + self.b),
+                "loguniform": lambda: math.sqrt(self.a * self.b),
+                "lognormal": lambda: self.a,
+                "normal": lambda: self.a,
+                "halfnormal": lambda: self.a * 0.6744897501960817}[self.kind]()
+
+    def bounds(self) -> tuple[float, float]:
+        """Support [lo, hi] (infinite ends as +-inf)."""
+        if self.kind in ("uniform", "loguniform"):
+            return self.a, self.b
+        if self.kind in ("lognormal", "halfnormal"):
+            return 0.0, math.inf
+        return -math.inf, math.inf
+
+    def describe(self, scale: float = 1.0) -> str:
+        s = lambda v: f"{v / scale:.4g}"
+        return {"uniform": lambda: f"Uniform({s(self.a)}, {s(self.b)})",
+                "loguniform": lambda: f"LogUniform({s(self.a)}, {s(self.b)})",
+                "lognormal": lambda: f"LogNormal(median {s(self.a)}, sd of log {self.b:.3g})",
+                "normal": lambda: f"Normal({s(self.a)}, {s(self.b)})",
+                "halfnormal": lambda: f"HalfNormal({s(self.a)})"}[self.kind]()
+
+
+def prior_median(prior: Any) -> float:
+    """Median of a :class:`Prior` or a NumPyro distribution (icdf(0.5), else its mean)."""
+    if isinstance(prior, Prior):
+        return prior.median()
+    try:
+        return float(prior.icdf(jnp.asarray(0.5)))
+    except (NotImplementedError, AttributeError, TypeError):
+        return float(prior.mean)
+
+
+@dataclass(frozen=True)
+class Param:
+    """A law parameter: sample-site name, unit, display label (LaTeX), prior, meaning.
+
+    ``display`` = (unit, scale): how tables show it (e.g. ('GPa', 1e9)). ``scene_key``:
+    the scene quantity that gives its nominal value (``beadrod shift`` uses it when the
+    parameter is not given; otherwise the prior median).
+    """
+
+    name: str
+    unit: str
+    label: str
+    prior: Any
+    description: str
+    display: tuple[str, float] | None = None
+    scene_key: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ContactLaw:
+    """One contact law (see the module docstring). Instances compare by identity.
+
+    ``force(delta, **kw)`` [N] is required. Optional fast paths, each called with the
+    resolved keywords:
+
+    * ``static_overlap(**kw)`` -> delta0 [m] under ``load``;
+    * ``overlap_from_frequency(f0, **kw)`` -> delta0 [m] a measured f0 [Hz] implies;
+    * ``shifts``: rung name -> ``fn(x, **kw)`` with ``delta0`` [m] and ``omega0``
+      [rad/s] among the keywords (per sweep);
+    * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
+    * ``contact_edge(**kw)`` -> the overlap [m] below which the surfaces separate
+      (default 0: unilateral contact; adhesive laws hold on to negative overlaps).
+
+    ``rungs``: the rungs the law can be fitted at; those without a ``shifts`` entry are
+    served by :mod:`models.generic` (exact, slow). ``in_default_comparison`` False keeps a
+    law out of ``beadrod compare`` unless it is asked for by name (the law says why in
+    its ``description``).
+    """
+
+    name: str
+    label: str
+    reference: str
+    params: tuple[Param, ...]
+    force: Callable[..., Any]
+    rungs: tuple[str, ...] = ("first_order", "backbone")
+    shifts: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+    static_overlap: Callable[..., Any] | None = None
+    overlap_from_frequency: Callable[..., Any] | None = None
+    linear_q: Callable[..., Any] | None = None
+    contact_edge: Callable[..., Any] | None = None
+    color: str | None = None
+    source: str = "built-in"
+    description: str = ""
+    tension_role: str | None = None
+    in_default_comparison: bool = True
+
+    # ------------------------------------------------------------------ parameters
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.params)
+
+    @property
+    def predicts_q(self) -> bool:
+        return self.linear_q is not None
+
+    def param(self, name: str) -> Param:
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise KeyError(f"law '{self.name}' has no parameter {name!r}; it has "
+                       f"{list(self.param_names)}")
+
+    def resolve(self, scene: Mapping[str, Any], theta: Mapping[str, Any]) -> dict[str, Any]:
+        """Keywords for the law's functions: scene quantities overlaid by ``theta``.
+
+        ``e_star`` follows ``young`` and ``poisson`` unless it is a law parameter.
+        """
+        kw = {k: scene[k] for k in SCENE_KEYS if k in scene}
+        kw.update(theta)
+        if "e_star" not in self.param_names and "young" in kw and "poisson" in kw:
+            kw["e_star"] = effective_modulus(kw["young"], kw["poisson"])
+        return kw
+
+    # --------------------------------------------------------------------- physics
+    def overlap(self, **kw: Any) -> Any:
+        """Static overlap delta0 [m] under ``load`` (fast path or generic root solve)."""
+        if self.static_overlap is not None:
+            return self.static_overlap(**kw)
+        from .generic import static_overlap
+
+        return static_overlap(self, **kw)
+
+    def overlap_at(self, f0: Any, **kw: Any) -> Any:
+        """delta0 [m] that the measured linear resonance f0 [Hz] implies (see module doc)."""
+        if self.overlap_from_frequency is not None:
+            return self.overlap_from_frequency(f0, **kw)
+        from .generic import overlap_from_frequency
+
+        return overlap_from_frequency(self, f0, **kw)
+
+    def edge(self, **kw: Any) -> Any:
+        """Overlap [m] at which contact is lost (0 unless the law is adhesive)."""
+        return 0.0 if self.contact_edge is None else self.contact_edge(**kw)
+
+    def shift(self, x: Any, *, rung: str, **kw: Any) -> Any:
+        """Delta f/f0 [-] at x = delta_a/delta0 on ``rung``.
+
+        ``kw`` are resolved keywords plus ``delta0`` [m] (the overlap x refers to; the
+        law's static overlap under ``load`` when absent) and ``omega0`` [rad/s].
+        A fast path is used when the law has one; otherwise the generic quadrature of
+        :mod:`models.generic` (exact, but far too slow for a sampler).
+        """
+        if rung not in self.rungs:
+            raise RungUnavailable(
+                f"law '{self.name}' has no rung {rung!r}; its rungs are {list(self.rungs)}")
+        fn = self.shifts.get(rung)
+        if fn is not None:
+            return fn(jnp.asarray(x, float), **kw)
+        from . import generic
+
+        if "delta0" not in kw:
+            kw = {**kw, "delta0": self.overlap(**kw)}
+        if rung == "first_order":
+            return generic.first_order_shift(self, x, **kw)
+        if rung == "backbone":
+            return generic.backbone_shift(self, x, **kw)
+        raise RungUnavailable(f"law '{self.name}': rung {rung!r} has no generic form; "
+                              "give it in the law's shifts")
+
+    def quality_factor(self, **kw: Any) -> Any:
+        """Linear Q [-] at ``omega0`` [rad/s]."""
+        if self.linear_q is None:
+            raise ValueError(f"law '{self.name}' predicts no linear Q (no loss channel)")
+        return self.linear_q(**kw)
+
+    def describe(self) -> dict[str, Any]:
+        """JSON-ready description (``beadrod laws --json``)."""
+        return {
+            "name": self.name, "label": self.label, "reference": self.reference,
+            "source": self.source, "rungs": list(self.rungs), "predicts_q": self.predicts_q,
+            "description": self.description,
+            "params": [{"name": p.name, "unit": p.unit, "label": p.label,
+                        "description": p.description, "prior": _prior_text(p)}
+                       for p in self.params],
+        }
+
+
+def _prior_text(p: Param) -> str:
+    if isinstance(p.prior, Prior):
+        if p.display is not None:
+            unit, scale = p.display
+            return f"{p.prior.describe(scale)} {unit}"
+        return p.prior.describe() + ("" if p.unit in ("-", "?") else f" {p.unit}")
+    return repr(p.prior)
+
+
+YOUNG = Param(
+    "young", "Pa", r"$E$", Prior("uniform", 150e9, 250e9),
+    "Young's modulus of bead and rod (taken equal). Prior Uniform(150, 250) GPa: "
+    "austenitic/martensitic stainless and carbon steels span about 180-215 GPa (paper: "
+    "190-210 GPa); the wider band leaves room for near-surface damage and grade "
+    "uncertainty without admitting non-steels.",
+    display=("GPa", 1e9), scene_key="young")
+"""E, shared by every law whose force is set by the elastic modulus."""
+
+GAMMA = Param(
+    "gamma", "J/m^2", r"$\gamma$", Prior("lognormal", 0.7, 0.5),
+    "Surface energy of each surface (work of adhesion w = 2 gamma). Prior LogNormal("
+    "median 0.7, sd of log 0.5) J/m^2: clean steel-steel surfaces are of order 1 J/m^2, "
+    "contaminated ones (air, oxide) a few tenths; the paper uses 0.7.",
+    scene_key="surface_energy")
+"""gamma, shared by the adhesive laws."""
+
+__all__ += ["YOUNG", "GAMMA"]

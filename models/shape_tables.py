@@ -1,0 +1,213 @@
+"""Tabulated exact backbones of the one-shape-parameter laws (JKR, DMT, Greenwood-Williamson).
+
+Why one shape parameter is enough. In the relative coordinate q = delta/delta0 - 1 the
+backbone depends only on the restoring force P'(q) = [F(delta0 (1+q)) - F0]/(K0 delta0)
+and the flight acceleration F0/(K0 delta0) (:mod:`models.generic`):
+
+* JKR is universal in Maugis' reduced units (F/Fc against delta/delta_c, Fc = 3 pi gamma
+  R): at a given load P' depends on r = F0/Fc alone (p = ln r);
+* DMT's P' is Hertz's inside contact, (2/3)((1+q)^(3/2) - 1); only its flight
+  acceleration (2/3) F0/(F0 + Fc), Fc = 4 pi gamma R, depends on r = F0/Fc (p = ln r);
+* the Greenwood-Williamson sphere is one universal curve F = F* f(D) in D = delta/sigma
+  (models.greenwood_williamson), so P' depends on D0' = delta0'/sigma alone, delta0' the
+  overlap counted from the contact edge -6 sigma (p = ln D0').
+
+E* drops out of all three (the tests check the invariance). The tables are built by
+:mod:`models.surrogate` (the tool of the power-law table) from the generic exact backbone
+of each law's force. Outside a law's p range the value is held at the end (each entry of
+:data:`TABLES` says what that means physically); x beyond X_MAX = 2 is held too. JKR and
+DMT contact is taken to part at delta = 0 (where the approach branch forms it; the
+snap-off hysteresis is a loss, not a stiffness). Errors against the generic exact backbone:
+tests/test_shape_tables.py.
+
+Regenerate (deterministic; minutes per law on 2 cores)::
+
+    python -m models.shape_tables --rebuild [--law jkr|dmt|gw]
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.typing import ArrayLike
+
+from . import surrogate
+
+__all__ = ["X_MAX", "TABLE_PATH", "TABLES", "ShapeTable", "backbone_fast", "exact_backbone",
+           "load_table", "build_table", "spec"]
+
+X_MAX = 2.0
+TABLE_PATH = pathlib.Path(__file__).with_name("data") / "shape_tables.npz"
+# table grid and the orbit rule used to build it: 24 Gauss nodes are spectrally accurate on
+# the contact arc (the flight arc's graded rule is fixed); the tests measure the table
+# against the 48-node exact backbone
+_M_CHEB, _N_KNOTS, _BUILD_NODES = 16, 48, 24
+
+
+def _jkr_kw(r, per_gamma):
+    radius, load = 0.01, 1.0
+    return {"load": load, "radius": radius, "e_star": 1e11, "mass": 1.0,
+            "gamma": load / (per_gamma * radius * jnp.asarray(r, float))}
+
+
+def _gw_kw(d0e):
+    from . import greenwood_williamson as gw
+    from . import hertz
+
+    load, radius, e_star = 0.158, 7.938e-3, 1.2e11
+    d_h = hertz.static_overlap(load, e_star=e_star, radius=radius)
+    sigma = d_h / gw.reduced_hertz_approach(jnp.asarray(d0e, float) - gw.SUMMIT_CUTOFF)
+    return {"load": load, "radius": radius, "e_star": e_star, "mass": 1.0,
+            "roughness_rms": sigma, "roughness_factor": 1.0}
+
+
+@dataclass(frozen=True)
+class ShapeTable:
+    """One law's table: ``law`` (module name holding LAW), ``reference_kw(s)`` the resolved
+    keywords of a contact whose shape parameter is s = exp(p), p in [p_lo, p_hi]."""
+
+    law: str
+    reference_kw: Callable
+    p_lo: float
+    p_hi: float
+    held: str
+
+
+TABLES: dict[str, ShapeTable] = {
+    "jkr": ShapeTable("jkr", lambda r: _jkr_kw(r, 3.0 * np.pi), float(np.log(0.3)),
+                      float(np.log(1000.0)),
+                      "r = F0/Fc > 1000 is adhesion below 0.1 % of the load (Hertz to the "
+                      "table's error); r < 0.3 is gamma > 7 J/m^2 for the paper's bead"),
+    "dmt": ShapeTable("dmt", lambda r: _jkr_kw(r, 4.0 * np.pi), float(np.log(0.3)),
+                      float(np.log(1000.0)), "as for JKR, with Fc = 4 pi gamma R"),
+    "greenwood_williamson": ShapeTable(
+        "greenwood_williamson", _gw_kw, float(np.log(1.5)), float(np.log(1e4)),
+        "D0' = delta0'/sigma > 1e4 is roughness below 1e-4 of the overlap (Hertz); D0' < 1.5 "
+        "is a load carried by the summits above 4.5 sigma alone (sigma > ~10x the paper's "
+        "roughness)"),
+}
+"""The tabulated laws and their shape coordinates."""
+_TABLES: dict[str, dict[str, np.ndarray]] = {}
+_EXACT: dict[tuple[str, int], object] = {}
+
+
+def _law(name):
+    import importlib
+
+    return importlib.import_module(f"models.{TABLES[name].law}").LAW
+
+
+def exact_backbone(name: str, x: ArrayLike, s: ArrayLike, nodes: int = 48) -> jnp.ndarray:
+    """Exact backbone Delta f/f0 of law ``name`` at x and shape parameter s (generic
+    quadrature of its force)."""
+    from .generic import backbone_shift
+
+    if (name, nodes) not in _EXACT:
+        law, ref = _law(name), TABLES[name].reference_kw
+
+        def one(xi, si):
+            kw = ref(si)
+            return backbone_shift(law, xi, delta0=law.overlap(**kw), nodes=nodes, **kw)
+
+        _EXACT[(name, nodes)] = jax.jit(jax.vmap(one))
+    x, s = jnp.broadcast_arrays(jnp.asarray(x, float), jnp.asarray(s, float))
+    return _EXACT[(name, nodes)](x.ravel(), s.ravel()).reshape(x.shape)
+
+
+def spec(name: str) -> surrogate.BackboneSpec:
+    """The surrogate specification of law ``name`` (p = ln s)."""
+    from .generic import backbone_orbit, contact_loss_turning_point, lindstedt_coefficient
+
+    tab = TABLES[name]
+
+    @jax.jit
+    @jax.vmap
+    def kink(p):
+        law, kw = _law(name), tab.reference_kw(jnp.exp(p))
+        d0 = law.overlap(**kw)
+        qc = contact_loss_turning_point(law, delta0=d0, **kw)
+        om, a1, _ = backbone_orbit(law, qc * (1.0 - 1e-12), delta0=d0, **kw)
+        return a1, om - 1.0
+
+    @jax.jit
+    @jax.vmap
+    def lindstedt(p):
+        law, kw = _law(name), tab.reference_kw(jnp.exp(p))
+        return lindstedt_coefficient(law, delta0=law.overlap(**kw), **kw)
+
+    def exact(x, p, xc):
+        out = np.empty_like(x)
+        size = 128  # bounded memory per batch; the last batch is padded (one compile)
+        for i in range(0, x.size, size):
+            n = min(size, x.size - i)
+            xs, ps = np.resize(x[i:i + size], size), np.resize(p[i:i + size], size)
+            out[i:i + n] = np.asarray(exact_backbone(name, xs, np.exp(ps),
+                                                     nodes=_BUILD_NODES))[:n]
+        return out
+
+    return surrogate.BackboneSpec(
+        p_lo=tab.p_lo, p_hi=tab.p_hi, exact=exact,
+        kink=lambda p: tuple(np.asarray(v) for v in kink(jnp.asarray(p))),
+        lindstedt=lambda p: np.asarray(lindstedt(jnp.asarray(p))),
+        x_max=X_MAX, m_cheb=_M_CHEB, n_knots=_N_KNOTS)
+
+
+def build_table(names: tuple[str, ...] = tuple(TABLES)) -> dict[str, np.ndarray]:
+    """The tables of ``names`` (keys prefixed 'NAME.'), merged into the stored ones."""
+    out = {}
+    if TABLE_PATH.exists():
+        with np.load(TABLE_PATH) as f:
+            out = {k: f[k] for k in f.files if k.split(".", 1)[0] not in names}
+    for name in names:
+        for k, v in surrogate.build(spec(name)).items():
+            out[f"{name}.{k}"] = v
+    return out
+
+
+def load_table(name: str) -> dict[str, np.ndarray]:
+    """The stored table of law ``name`` (numpy arrays, loaded once)."""
+    if not _TABLES:
+        with np.load(TABLE_PATH) as f:
+            for key in f.files:
+                law, k = key.split(".", 1)
+                _TABLES.setdefault(law, {})[k] = f[key]
+    return _TABLES[name]
+
+
+def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
+    """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
+    law's overlap) and shape parameter s; x clipped to [0, X_MAX], ln s to the table's
+    range (values held at the ends: :data:`TABLES`). Differentiable, NaN-free."""
+    tab = TABLES[name]
+    p = jnp.clip(jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300)), tab.p_lo, tab.p_hi)
+    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p)
+
+
+def _main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m models.shape_tables", description=__doc__)
+    ap.add_argument("--rebuild", action="store_true", help=f"recompute and write {TABLE_PATH}")
+    ap.add_argument("--law", action="append", choices=list(TABLES),
+                    help="rebuild only this law's table (repeatable; default: all)")
+    args = ap.parse_args(argv)
+    if not args.rebuild:
+        ap.print_help()
+        return 0
+    jax.config.update("jax_enable_x64", True)
+    t0 = time.perf_counter()
+    table = build_table(tuple(args.law or TABLES))
+    tmp = TABLE_PATH.with_name(TABLE_PATH.name + ".tmp.npz")
+    np.savez(tmp, **table)
+    tmp.replace(TABLE_PATH)
+    print(f"wrote {TABLE_PATH} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(_main())

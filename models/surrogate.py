@@ -1,0 +1,174 @@
+"""The tool that builds fast backbone surrogates for one-shape-parameter laws.
+
+A law whose dimensionless backbone Delta f/f0 = S(x; p) depends on one shape parameter p
+(the power law's n; the JKR and DMT load ratio F0/Fc, as log F0/Fc) gets a table built
+here from its exact backbone, fast enough for NUTS (about 0.2 us per point with gradient).
+The power-law table of :mod:`models.backbone_table` and the adhesive tables of
+:mod:`models.adhesive_backbone` are built and evaluated by this one tool.
+
+Structure (measured on the power law, see models.backbone_table): contact loss starts at
+the first-harmonic amplitude x_c(p), where S is C1 but not C2. The x axis is split there,
+with kink-aligned coordinates u = x/x_c(p) (contact) and v = (x - x_c)/(x_max - x_c)
+(flight). Below x_c, S = pre(p) x^2 Q(u, p) with Q smooth and Q(0, p) the Lindstedt
+coefficient divided by pre(p) (exact at small x). In each region a cubic spline (C2) in
+u (resp. v) on 64 knots graded towards the kink (u_i = 1 - (1 - i/63)^2, v_i = (i/63)^2),
+tensor product with a degree-23 Chebyshev interpolant in p on the 24 Chebyshev-Gauss
+nodes of [p_lo, p_hi]; x_c(p) is a Chebyshev interpolant on the same nodes. The contact
+spline is not-a-knot; the flight spline is clamped at v = 0 to the contact spline's slope
+there, so the surrogate is C1 across x_c like the exact backbone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+import numpy as np
+
+from ._math import knot_cell
+
+__all__ = ["BackboneSpec", "build", "evaluate", "chebyshev_nodes", "chebyshev_basis",
+           "kink_amplitude", "to_chebyshev", "spline_coefficients"]
+
+
+@dataclass(frozen=True)
+class BackboneSpec:
+    """What the tool needs of a law's exact backbone.
+
+    ``exact(x, p, xc)``: exact S at arrays x, p (x_c(p) given for rules that refine next
+    to the kink); ``kink(p)``: (x_c, S_c) at the onset of contact loss; ``lindstedt(p)``:
+    c(p) in S = c x^2 + O(x^4); ``prefactor(p)``: pre(p) (n - 1 for the power law, whose
+    shift vanishes identically at n = 1; 1 otherwise).
+    """
+
+    p_lo: float
+    p_hi: float
+    exact: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    kink: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+    lindstedt: Callable[[np.ndarray], np.ndarray]
+    prefactor: Callable[[np.ndarray], np.ndarray] = lambda p: np.ones_like(p)
+    x_max: float = 2.0
+    m_cheb: int = 24
+    n_knots: int = 64
+
+
+def chebyshev_nodes(spec: BackboneSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Chebyshev-Gauss nodes nu_j in (-1, 1) and p_j (no node at the domain ends)."""
+    m = spec.m_cheb
+    nu = np.cos(np.pi * (np.arange(m) + 0.5) / m)
+    return nu, 0.5 * (spec.p_lo + spec.p_hi) + nu * (spec.p_hi - spec.p_lo) / 2.0
+
+
+def _knots(k: int) -> tuple[np.ndarray, np.ndarray]:
+    s = np.linspace(0.0, 1.0, k)
+    return 1.0 - (1.0 - s) ** 2, s**2
+
+
+def to_chebyshev(values: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """Values on the Chebyshev-Gauss nodes nu (last axis) -> Chebyshev coefficients."""
+    m = values.shape[-1]
+    t = np.cos(np.outer(np.arange(m), np.arccos(nu)))  # T_k(nu_j)
+    coef = values @ t.T * (2.0 / m)
+    coef[..., 0] /= 2.0
+    return coef
+
+
+def spline_coefficients(knots: np.ndarray, data: np.ndarray,
+                        start_slope: np.ndarray | None = None) -> np.ndarray:
+    """Cubic spline of data (knots, m) -> local power coefficients (4, k-1, m); not-a-knot
+    ends, or a clamped first derivative ``start_slope`` (m,) at the first knot."""
+    from scipy.interpolate import CubicSpline
+
+    bc = "not-a-knot" if start_slope is None else ((1, start_slope), "not-a-knot")
+    return CubicSpline(knots, data, axis=0, bc_type=bc).c
+
+
+def build(spec: BackboneSpec) -> dict[str, np.ndarray]:
+    """Evaluate the exact backbone on the grid and fit the splines (deterministic)."""
+    nu, p = chebyshev_nodes(spec)
+    uk, vk = _knots(spec.n_knots)
+    xc, sc = (np.asarray(a, float) for a in spec.kink(p))
+    pre = np.asarray(spec.prefactor(p), float)
+    xm = spec.x_max
+    qa = np.empty((uk.size, p.size))
+    qa[0] = np.asarray(spec.lindstedt(p)) / pre
+    qa[-1] = sc / (pre * xc**2)
+    uu, pp = np.meshgrid(uk[1:-1], p, indexing="ij")
+    xcb = np.broadcast_to(xc, pp.shape)
+    x = uu * xcb
+    qa[1:-1] = spec.exact(x.ravel(), pp.ravel(), xcb.ravel()).reshape(uu.shape) / (
+        np.broadcast_to(pre, pp.shape) * x**2)
+    sb = np.empty((vk.size, p.size))
+    sb[0] = sc
+    vv, pp = np.meshgrid(vk[1:], p, indexing="ij")
+    xcb = np.broadcast_to(xc, pp.shape)
+    sb[1:] = spec.exact((xcb + vv * (xm - xcb)).ravel(), pp.ravel(),
+                        xcb.ravel()).reshape(vv.shape)
+    coef_q = spline_coefficients(uk, qa)
+    # clamp the flight spline to the contact spline's slope at x_c: S = pre x^2 Q(x/x_c),
+    # dS/dx = pre x_c (2 Q(1) + Q'(1)), dv/dx = 1/(x_max - x_c)
+    h = uk[-1] - uk[-2]
+    dq = (3 * coef_q[0, -1] * h + 2 * coef_q[1, -1]) * h + coef_q[2, -1]
+    slope = pre * xc * (2.0 * qa[-1] + dq) * (xm - xc)
+    return {
+        "n_nodes": p, "u_knots": uk, "v_knots": vk, "xc_nodes": xc,
+        "q_contact": qa, "s_flight": sb, "kink_slope": slope,
+        "xc_cheb": to_chebyshev(xc, nu),
+        "coef_contact": to_chebyshev(coef_q, nu),
+        "coef_flight": to_chebyshev(spline_coefficients(vk, sb, slope), nu),
+        "x_max": np.asarray(xm), "p_range": np.asarray([spec.p_lo, spec.p_hi]),
+    }
+
+
+def chebyshev_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
+    """T_0..T_{m-1}(nu) by the three-term recurrence (smooth at nu = +-1, unlike arccos)."""
+    t = [jnp.ones_like(nu), nu]
+    for _ in range(m - 2):
+        t.append(2.0 * nu * t[-1] - t[-2])
+    return jnp.stack(t[:m], axis=-1)
+
+
+def _spline_eval(knots, coef, z, basis, frac):
+    # basis (m,) when p is one scalar (the sampler's case): the Chebyshev sum is taken once
+    # per knot before the per-point gather, ~100x cheaper under vmap than (4, points, m)
+    i, d = knot_cell(knots, z, frac)
+    if basis.ndim == 1:
+        c = (jnp.asarray(coef) @ basis)[:, i]
+    else:
+        c = jnp.einsum("k...m,...m->k...", jnp.asarray(coef)[:, i, :], basis)
+    return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
+
+
+def kink_amplitude(table: dict[str, np.ndarray], p: jnp.ndarray, p_lo: float,
+                   p_hi: float) -> jnp.ndarray:
+    """x_c(p) from its Chebyshev interpolant."""
+    nu = (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo)
+    return chebyshev_basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
+
+
+def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
+             prefactor: Callable[[jnp.ndarray], jnp.ndarray] | None = None) -> jnp.ndarray:
+    """S(x, p) from ``table`` for x in [0, x_max], p in its range (callers clamp; both
+    branches are evaluated on clamped coordinates so values and gradients stay finite)."""
+    p_lo, p_hi = (float(v) for v in table["p_range"])
+    x_max = float(table["x_max"])
+    if jnp.ndim(p) > 0:
+        x, p = jnp.broadcast_arrays(x, p)
+    xs = jnp.clip(x, 0.0, x_max)
+    ps = jnp.clip(p, p_lo, p_hi)
+    nu = (2.0 * ps - (p_lo + p_hi)) / (p_hi - p_lo)
+    basis = chebyshev_basis(nu, table["n_nodes"].size)
+    xc = basis @ jnp.asarray(table["xc_cheb"])
+    last = table["u_knots"].size - 1
+    u = xs / xc
+    v = (xs - xc) / (x_max - xc)
+    fu = last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0)))
+    fv = last * jnp.sqrt(jnp.clip(v, 0.0, 1.0))
+    q = _spline_eval(table["u_knots"], table["coef_contact"], u, basis, fu)
+    pre = 1.0 if prefactor is None else prefactor(ps)
+    contact = pre * xs**2 * q
+    flight = _spline_eval(table["v_knots"], table["coef_flight"], v, basis, fv)
+    return jnp.where(xs <= xc, contact, flight)
+
+

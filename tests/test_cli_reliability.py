@@ -1,0 +1,506 @@
+"""What the command line gives bad input, failed fits, interrupted runs and resumes.
+
+Each test names the behaviour it pins down; each failed on the code before it (a
+traceback, a silent reuse, exit status 0, a stale file, a NaN). The sampling runs use
+tiny counts: their numbers mean nothing, only what the command does with them.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import logging
+import re
+import subprocess
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+import pytest
+
+from workflows.cli import build_parser, main
+from workflows.config import DEFAULTS, DESCRIPTIONS, leaf_keys
+
+ROOT = Path(__file__).parents[1]
+TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1", "--workers", "1",
+        "--evidence", "bridge"]
+NOFIG = "[report]\nfigures = false\n"
+
+
+def _config(path: Path, text: str) -> str:
+    path.write_text(text)
+    return str(path)
+
+
+def _subparser(name: str):
+    action = next(a for a in build_parser()._actions if a.dest == "command")
+    return action.choices[name]
+
+
+# ----------------------------------------------------------------------------- start-up
+
+
+def test_building_the_parser_imports_no_jax():
+    # models.rungs (the one list of rungs, plain Python) is the only model module it reads
+    code = ("import sys; from workflows.cli import build_parser; build_parser(); "
+            "print([m for m in sys.modules if m.split('.')[0] in ('jax', 'numpyro', 'arviz', "
+            "'pandas', 'models', 'inference', 'data') and m not in ('models', 'models.rungs')])")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[]"
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert re.fullmatch(r"beadrod \S+.*\n", capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("command", ["compare", "fit", "rungs"])
+def test_help_shows_every_default(command):
+    p = _subparser(command)
+    for a in p._actions:
+        takes_value = a.option_strings and a.nargs != 0 and a.dest != "help"
+        if takes_value and a.dest not in ("config", "data", "laws", "law", "law_files"):
+            assert "default" in (a.help or ""), f"{command} {a.option_strings[0]}: no default"
+    helps = {o: " ".join((a.help or "").split()) for a in p._actions for o in a.option_strings}
+    s, e = DEFAULTS["sampling"], DEFAULTS["evidence"]
+    expected = {"--warmup": s["warmup"], "--samples": s["samples"], "--chains": s["chains"],
+                "--seed": DEFAULTS["seed"]}
+    if command != "rungs":
+        expected["--live-points"] = e["live_points"]
+    for flag, value in expected.items():
+        assert re.search(rf"default: {value}\b", helps[flag]), (flag, helps[flag])
+    assert "default" in p.format_help()  # argparse prints them
+
+
+def test_help_config_lists_the_config_only_options(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", "--help-config"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    for line in ("use_q = true", 'shift_reference = "first"', "paper_rung = true",
+                 "pair_plots = true", "target_accept = 0.9", "[tension]", "enabled = true"):
+        assert line in out, line
+    assert "preceding" in out  # the meaning, with the valid values
+    assert "warmup =" not in out and "live_points =" not in out  # those have flags
+    assert set(DESCRIPTIONS) == set(leaf_keys())  # one meaning per key, from config.py
+
+
+# ------------------------------------------------------------------ one-line errors
+
+
+BAD_CONFIGS = [
+    ("laws = 5", "laws must be a list of law names"),
+    ('laws = ["hertz", 5]', "laws must be a list of law names"),
+    ('rung = "bogus"', "rung must be one of first_order, backbone, paper_eq25"),
+    ("data = 5", "'data' must be str"),
+    ('[likelihood]\nshift_reference = "previous"', "did you mean 'preceding'"),
+    ("[sampling]\nwarmup = 5", "sampling.warmup must be an integer >= 20"),
+    ("[sampling]\nwarmup = 0", "sampling.warmup must be an integer >= 20"),
+    ("[sampling]\nsamples = 5", "sampling.samples must be an integer >= 20"),
+    ("[sampling]\nsamples = 0", "sampling.samples must be an integer >= 20"),
+    ("[sampling]\nchains = 0", "sampling.chains must be an integer >= 1"),
+    ("[sampling]\nchains = -3", "sampling.chains must be an integer >= 1"),
+    ("[sampling]\nchains = true", "'sampling.chains' must be int, got bool"),
+    ("[sampling]\ntarget_accept = 1.5", "strictly between 0 and 1"),
+]
+
+
+@pytest.mark.parametrize("text,message", BAD_CONFIGS)
+def test_bad_config_is_one_line_before_anything_runs(tmp_path, capsys, monkeypatch, text,
+                                                    message):
+    import workflows.comparison
+
+    monkeypatch.setattr(workflows.comparison, "run_compare",
+                        lambda *a, **k: pytest.fail("a bad config was accepted"))
+    out = tmp_path / "out"
+    # compare: the laws come from the file (fit's --law would override them)
+    rc = main(["compare", "--config", _config(tmp_path / "c.toml", text + "\n"),
+               "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists()  # refused before the output folder is touched
+
+
+@pytest.mark.parametrize("flags,message", [
+    (["--chains", "0"], ">= 1"), (["--warmup", "5"], ">= 20"), (["--samples", "0"], ">= 20")])
+def test_bad_sampling_flags_are_refused(tmp_path, capsys, flags, message):
+    assert main(["fit", "--law", "hertz", "--out", str(tmp_path / "o"), *flags]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_unknown_law_refused_before_the_data_are_loaded(tmp_path, capsys, monkeypatch):
+    import workflows.comparison as comparison
+    import workflows.pipeline as pipeline
+
+    def no_data(cfg):
+        raise AssertionError("the data were loaded before the law names were checked")
+
+    monkeypatch.setattr(pipeline, "load_data", no_data)
+    monkeypatch.setattr(comparison, "load_data", no_data)
+    assert main(["compare", "--laws", "hertz,hertzz", "--out", str(tmp_path / "o"), *TINY]) == 2
+    err = capsys.readouterr().err
+    assert "unknown law 'hertzz'" in err and "did you mean 'hertz'" in err
+    assert main(["fit", "--law", "bogus", "--out", str(tmp_path / "p"), *TINY]) == 2
+    assert "unknown law 'bogus'" in capsys.readouterr().err
+
+
+def test_out_pointing_at_a_file(tmp_path, capsys):
+    f = tmp_path / "afile"
+    f.write_text("not a folder\n")
+    assert main(["fit", "--law", "hertz", "--out", str(f), *TINY]) == 2
+    err = capsys.readouterr().err
+    assert "is a file, not a folder" in err and err.count("\n") == 1
+    assert f.read_text() == "not a folder\n"
+
+
+def test_bench_names_the_missing_extra(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "mpmath", None)  # as on the main install
+    assert main(["bench", "physics", "--quick", "--out", str(tmp_path)]) == 2
+    assert 'pip install -e ".[bench]"' in capsys.readouterr().err
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]["bench"]
+    assert any(e.startswith("mpmath") for e in extras)
+
+
+@pytest.mark.parametrize("value", ["-1", "0", "nan", "inf"])
+def test_plan_says_what_is_wrong_with_the_amplitude(capsys, value):
+    assert main(["plan", "--builtin", "paper", "--amplitude-max", value]) == 2
+    err = capsys.readouterr().err
+    assert "--amplitude-max" in err and "> 0" in err and "pass amplitude_max" not in err
+
+
+# ------------------------------------------------------------------ beadrod shift
+
+
+@pytest.mark.parametrize("n", ["0.5", "0.9", "1", "3.5", "4", "4.01", "5", "10", "nan"])
+def test_shift_refuses_power_law_exponents_outside_its_domain(capsys, n):
+    assert main(["shift", "--law", "powerlaw", "--n", n, "--x", "0.5", "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "n = " in captured.err
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--x", "-0.5"], ">= 0"),
+    (["--x", "nan"], "finite"),
+    (["--x", "0.5", "--young", "0"], "Young's modulus must lie in"),
+    (["--x", "0.5", "--young=-2e11"], "Young's modulus must lie in"),
+    (["--x", "0.5", "--law", "viscoelastic", "--eta", "-1"], "viscosity must lie in"),
+    (["--x", "10"], "--method backbone"),   # first order far past contact loss
+    (["--x", "10", "--method", "backbone"], "x must be <= 2"),
+])
+def test_shift_refuses_what_has_no_meaning(capsys, args, message):
+    argv = ["shift", *args] if "--law" in args else ["shift", "--law", "hertz", *args]
+    assert main(argv + ["--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and message in captured.err
+
+
+def test_shift_json_is_strict_and_values_are_physical(capsys):
+    def strict(const):
+        raise AssertionError(f"non-JSON constant {const}")
+
+    assert main(["shift", "--law", "powerlaw", "--n", "3", "--x", "0", "0.5", "2",
+                 "--json"]) == 0
+    t = json.loads(capsys.readouterr().out, parse_constant=strict)
+    # F ~ delta^3: <(1 + x sin t)^2>/2 - 1/2 = x^2/4 for x <= 1 (paper Eq. 27)
+    assert t["delta_f_over_f0"][:2] == pytest.approx([0.0, 0.0625], abs=1e-12)
+    assert main(["shift", "--law", "hertz", "--x", "2", "--method", "backbone", "--json"]) == 0
+    bb = json.loads(capsys.readouterr().out, parse_constant=strict)["delta_f_over_f0"][0]
+    assert -1.0 < bb < 0.0  # the exact backbone softens past contact loss
+
+
+# ----------------------------------------------------------------- progress display
+
+
+def test_progress_bar_on_a_terminal_and_plain_lines_elsewhere(tmp_path):
+    import io
+
+    from workflows import progress, runtime
+
+    log = logging.getLogger("beadrod")
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    for tty in (True, False):
+        runtime.setup_logging(tmp_path, quiet=False)
+        stream = Tty() if tty else io.StringIO()
+        with progress.RunProgress(4, 2, what="fits", stream=stream):
+            progress.begin(log, "a", "a: NUTS")
+            progress.done(log, "a", "a: NUTS done", steps=2, final=True)
+            log.warning("something to say")
+            progress.begin(log, "b", "b: NUTS")
+            progress.done(log, "b", "b: NUTS done", steps=2, final=True)
+        text = stream.getvalue()
+        assert "something to say" in text
+        if tty:  # one bar: steps out of total, fits done, elapsed<remaining
+            assert "4/4 steps" in text and "fits 2/2" in text and "<" in text
+            assert "a: NUTS done" not in text  # step lines go to the log file only
+        else:
+            assert "[2/4] a: NUTS done" in text and "[4/4] b: NUTS done" in text
+            assert "ETA" in text
+    runtime.setup_logging(None, quiet=False)
+    logged = (tmp_path / "beadrod.log").read_text()
+    assert "a: NUTS done" in logged and "\x1b" not in logged and "%|" not in logged
+
+
+def test_quiet_shows_no_progress(tmp_path):
+    import io
+
+    from workflows import progress, runtime
+
+    runtime.setup_logging(tmp_path, quiet=True)
+    stream = io.StringIO()
+    with progress.RunProgress(2, 1, stream=stream, tty=True):
+        progress.done(logging.getLogger("beadrod"), "a", "a done", steps=2, final=True)
+    runtime.setup_logging(None, quiet=False)
+    assert stream.getvalue() == ""
+
+
+# ------------------------------------------------------------------------ layering
+
+
+def _workflows_imports() -> dict[str, set[str]]:
+    graph = {}
+    for path in (ROOT / "workflows").glob("*.py"):
+        deps = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                mod = node.module or ""
+                if node.level == 1:
+                    names = [mod] if mod else [a.name for a in node.names]
+                    deps |= {f"workflows.{n.split('.')[0]}" for n in names}
+                elif mod.startswith("workflows."):
+                    deps.add(".".join(mod.split(".")[:2]))
+            elif isinstance(node, ast.Import):
+                deps |= {".".join(a.name.split(".")[:2]) for a in node.names
+                         if a.name.startswith("workflows.")}
+        graph[f"workflows.{path.stem}"] = deps - {f"workflows.{path.stem}"}
+    return graph
+
+
+def test_parallel_runs_what_it_is_handed_and_workflows_has_no_cycle():
+    g = _workflows_imports()
+    assert g["workflows.parallel"] <= {"workflows.runtime"}
+    for mod in ("workflows.cli", "workflows.parallel"):
+        assert "workflows.cmd_compare" not in g[mod] and "workflows.pipeline" not in g[mod]
+    state: dict[str, int] = {}
+
+    def visit(m: str, path: tuple[str, ...]) -> None:
+        state[m] = 1
+        for d in g.get(m, ()):
+            assert state.get(d) != 1, f"import cycle: {' -> '.join(path + (d,))}"
+            if d not in state:
+                visit(d, path + (d,))
+        state[m] = 2
+
+    for m in g:
+        if m not in state:
+            visit(m, (m,))
+
+
+# ------------------------------------------------------------ failed runs, leftovers
+
+
+def test_no_library_noise_and_a_failed_run_logs_its_error(tmp_path):
+    out = tmp_path / "o"
+    argv = [sys.executable, "-m", "workflows.cli", "fit", "--law", "hertz", "--out", str(out),
+            "--data", str(tmp_path / "missing"), *TINY]
+    r = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert r.returncode == 2
+    # one line: no ArviZ banner, no warning with a source line, no traceback
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("beadrod: error:"), r.stderr
+    assert "missing" in (out / "beadrod.log").read_text()
+    # the folder holds only the failed run's log: the rerun is not refused as "not empty"
+    r2 = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert r2.returncode == 2 and "not empty" not in r2.stderr and "missing" in r2.stderr
+
+
+def _gate_always_fails(monkeypatch):
+    from inference import diagnostics
+
+    orig = diagnostics.check
+
+    def strict(idata, **kw):  # no run reaches a bulk ESS of 1e12
+        return orig(idata, **{**kw, "ess_min": 1e12})
+
+    monkeypatch.setattr(diagnostics, "check", strict)
+
+
+def _bridge_fails_for(monkeypatch, law: str):
+    from inference import bridge
+
+    orig = bridge.bridge_sampling_log_z
+
+    def flaky(model, *a, **kw):
+        if model.spec.law == law:
+            raise RuntimeError("bridge sampling did not converge in 100 iterations")
+        return orig(model, *a, **kw)
+
+    monkeypatch.setattr(bridge, "bridge_sampling_log_z", flaky)
+
+
+def _run(argv: list[str]) -> dict:
+    """main(argv) with stdout, stderr and warnings recorded (a module-scoped fixture
+    cannot use capsys)."""
+    import contextlib
+    import io
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rc = main(argv)
+    return {"rc": rc, "err": err.getvalue(), "out": out.getvalue(),
+            "warnings": [str(w.message) for w in caught]}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """One output folder taken through a sequence of runs (each stage is one test below)."""
+    tmp = tmp_path_factory.mktemp("reliability")
+    out = tmp / "run"
+    base = ["--out", str(out), *TINY]
+    cfg_a = _config(tmp / "a.toml", NOFIG)
+    stages = {}
+    with pytest.MonkeyPatch.context() as mp:  # 1. every gate fails (forced)
+        _gate_always_fails(mp)
+        stages["fail"] = _run(["compare", "--laws", "hertz,powerlaw", "--config", cfg_a, *base])
+    stages["fail"]["log"] = (out / "beadrod.log").read_text()
+    mtime = (out / "laws" / "hertz.json").stat().st_mtime_ns
+    # 2. temporaries left by a SIGKILL, then --resume --allow-failed --quiet: all reused
+    parts = [out / "laws" / ".hertz.json.k1ll3d.part.json",
+             out / "idata" / ".hertz.nc.k1ll3d.part.nc", out / ".report.html.x1.part.html"]
+    for p in parts:
+        p.write_bytes(b"")
+    stages["reuse"] = _run(["compare", "--laws", "hertz,powerlaw", "--config", cfg_a, *base,
+                            "--resume", "--allow-failed", "--quiet"])
+    stages["reuse"]["parts_left"] = [p for p in parts if p.exists()]
+    stages["reuse"]["refitted"] = (out / "laws" / "hertz.json").stat().st_mtime_ns != mtime
+    # 3. a truncated summary, and bridge sampling that fails for hertz: --resume
+    text = (out / "laws" / "hertz.json").read_text()
+    (out / "laws" / "hertz.json").write_text(text[: len(text) // 2])
+    with pytest.MonkeyPatch.context() as mp:
+        _bridge_fails_for(mp, "hertz")
+        stages["bridge"] = _run(["compare", "--laws", "hertz,powerlaw", "--config", cfg_a,
+                                 *base, "--resume"])
+    stages["bridge"]["laws"] = {n: json.loads((out / "laws" / f"{n}.json").read_text())
+                                for n in ("hertz", "powerlaw")}
+    key_a = stages["bridge"]["laws"]["hertz"]["cache_key"]
+    # 4. --resume with only the shift reference changed (a config-only option)
+    cfg_b = _config(tmp / "b.toml", NOFIG + '[likelihood]\nshift_reference = "preceding"\n')
+    stages["reference"] = _run(["fit", "--law", "hertz", "--config", cfg_b, *base, "--resume",
+                                "--allow-failed"])
+    stages["reference"]["key"] = json.loads((out / "laws" / "hertz.json").read_text())[
+        "cache_key"]
+    stages["reference"]["key_before"] = key_a
+    stages["reference"]["resolved"] = tomllib.loads((out / "config.resolved.toml").read_text())
+    # 5. --force over a folder with another run's laws (and a file of the user's), no Q
+    (out / "laws" / "jkr.json").write_text("{}")
+    (out / "idata" / "jkr.nc").write_bytes(b"")
+    (out / "notes.txt").write_text("mine\n")
+    cfg_c = _config(tmp / "c.toml", NOFIG + "[likelihood]\nuse_q = false\n")
+    stages["force"] = _run(["fit", "--law", "hertz", "--config", cfg_c, *base, "--force",
+                            "--allow-failed"])
+    stages["force"]["files"] = sorted(str(p.relative_to(out)) for p in out.rglob("*")
+                                      if p.is_file())
+    from workflows.idata_io import load_idata
+
+    idata = load_idata(out / "idata" / "hertz.nc")
+    stages["force"]["groups"] = {g: sorted(getattr(idata, g).data_vars) for g in
+                                 ("log_likelihood", "observed_data")}
+    return stages
+
+
+def test_failed_gate_exits_non_zero_with_one_summary_line(runs):
+    r = runs["fail"]
+    assert r["rc"] == 1
+    summary = [ln for ln in r["err"].splitlines() if "FAILED their gate" in ln]
+    assert len(summary) == 1 and "hertz" in summary[0] and "powerlaw" in summary[0]
+    assert "--allow-failed" in summary[0]
+    assert "FAILED their gate" in r["log"]
+    # each gate failure reported once, by the log, and never again as a Python warning
+    assert r["err"].count("FAILED its diagnostics") == 2
+    assert not re.search(r"\.py:\d+: \w*Warning", r["err"])  # no warning with a source line
+    assert "RuntimeWarning: NUTS run" not in r["err"]
+    assert not any("FAILED its diagnostics" in w for w in r["warnings"])
+
+
+def test_progress_lines_count_every_step(runs):
+    steps = re.findall(r"\[(\d+)/(\d+)\]", runs["fail"]["err"])
+    assert steps and len({t for _, t in steps}) == 1
+    assert int(steps[-1][0]) == int(steps[-1][1])  # the count ends at the total
+    assert "ETA" in runs["fail"]["err"]
+
+
+def test_resume_allow_failed_quiet_and_temporaries(runs):
+    r = runs["reuse"]
+    assert r["rc"] == 0 and not r["refitted"]
+    assert not r["parts_left"], "temporaries of a killed run survived --resume"
+    assert not re.search(r"\[\d+/\d+\]", r["err"])  # --quiet: no progress
+    assert all("warning" in ln.lower() or "FAILED" in ln for ln in r["err"].splitlines())
+
+
+def test_bridge_failure_marks_the_law_failed_and_the_comparison_goes_on(runs):
+    r = runs["bridge"]
+    assert r["rc"] == 1 and "Traceback" not in r["err"]
+    assert "unreadable" in r["err"]  # the truncated summary was refitted, not a crash
+    hertz, powerlaw = r["laws"]["hertz"], r["laws"]["powerlaw"]
+    assert hertz["status"] == "failed" and hertz["log_z"] is None
+    assert any("evidence (bridge) failed" in f for f in hertz["failures"])
+    assert powerlaw["log_z"] is not None  # the other law kept its evidence
+
+
+def test_resume_refits_when_the_shift_reference_changes(runs):
+    r = runs["reference"]
+    assert r["rc"] == 0
+    assert "inputs changed" in r["err"] or "refitting" in r["err"]
+    assert r["key"] != r["key_before"]
+    assert r["resolved"]["likelihood"]["shift_reference"] == "preceding"
+
+
+def test_force_removes_the_earlier_run_and_use_q_false_drops_q(runs):
+    r = runs["force"]
+    assert r["rc"] == 0
+    files = r["files"]
+    assert "notes.txt" in files  # not beadrod's: left alone
+    assert not any("jkr" in f or "powerlaw" in f for f in files), files
+    assert "q_obs" not in r["groups"]["log_likelihood"]
+    assert "q_obs" not in r["groups"]["observed_data"]
+    assert "shift_obs" in r["groups"]["log_likelihood"]
+
+
+def test_cache_key_follows_the_model_inputs():
+    """The key of a fit is the same for the same inputs (reloaded), and changes with any
+    option that changes what enters the model."""
+    import copy
+
+    from inference.likelihood import model_inputs
+    from workflows.comparison import model_specs
+    from workflows.pipeline import _cache_key, load_data
+
+    def key(cfg, spec=None):
+        ds = load_data(cfg)
+        spec = spec or model_specs(cfg, ["hertz"])["hertz"]
+        return _cache_key("hertz", spec, cfg, model_inputs(ds), ds.data_hash)
+
+    cfg = copy.deepcopy(DEFAULTS)
+    k0 = key(cfg)
+    assert key(copy.deepcopy(DEFAULTS)) == k0  # reloaded data, same key
+    for path, value in [(("likelihood", "shift_reference"), "preceding"),
+                        (("likelihood", "two_percent_rule"), False),
+                        (("likelihood", "use_q"), False), (("seed",), 7),
+                        (("sampling", "target_accept"), 0.95)]:
+        c = copy.deepcopy(DEFAULTS)
+        (c[path[0]] if len(path) == 2 else c)[path[-1]] = value
+        assert key(c) != k0, path
+    c = copy.deepcopy(DEFAULTS)
+    c["out"], c["quiet"], c["workers"] = "elsewhere", True, 3  # where and how, not what
+    assert key(c) == k0

@@ -1,0 +1,47 @@
+"""``beadrod laws [--json]``: every contact law with its parameters, rungs and source."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from . import lawfiles
+
+__all__ = ["register", "describe_laws"]
+
+
+def describe_laws(paths: list[str]) -> list[dict]:
+    """Descriptions of every registered law (built in, then the law files ``paths``)."""
+    from models import registry
+
+    lawfiles.load(paths)
+    return [law.describe() for law in registry.laws()]
+
+
+def _text(rows: list[dict]) -> str:
+    out = []
+    for r in rows:
+        src = "built-in" if r["source"] == "built-in" else r["source"]
+        out.append(f"{r['name']}: {r['label']}  [{src}]")
+        out.append(f"  rungs: {', '.join(r['rungs'])}"
+                   + ("; predicts the linear Q" if r["predicts_q"] else ""))
+        out.append(f"  reference: {r['reference']}")
+        if r["description"]:
+            out.append(f"  {r['description']}")
+        for p in r["params"]:
+            out.append(f"  - {p['name']} [{p['unit']}]: prior {p['prior']}")
+    return "\n".join(out)
+
+
+def _run(args: argparse.Namespace) -> int:
+    rows = describe_laws(lawfiles.paths_of(args))
+    print(json.dumps(rows, indent=2, allow_nan=False) if args.json else _text(rows))
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("laws", help="list every contact law: parameters, priors, rungs",
+                       description=__doc__)
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    lawfiles.add_argument(p)
+    p.set_defaults(func=_run)

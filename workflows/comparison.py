@@ -1,0 +1,188 @@
+"""``beadrod compare`` and ``beadrod fit`` from start to end, and the jobs they run.
+
+CSV -> validated dataset -> one ModelSpec per law (workflows.pipeline) -> the fits, side
+by side in worker processes (workflows.parallel, run by :data:`JOBS`) -> the tension
+analysis, the figures, the tables and the report (workflows.compare_outputs), under one
+progress display (workflows.progress).
+
+This module sits above the ones it uses: parallel (which imports only runtime), pipeline
+and compare_outputs never import it, and the commands (cmd_compare, cmd_rungs) and the
+benchmarks do. That keeps the workflows' imports free of cycles
+(tests/test_cli_reliability.py checks it).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+from .parallel import Job, resolve_workers, run_jobs
+from .pipeline import (
+    LawRun,
+    beadrod_version,
+    comparison_specs,
+    fit_law,
+    fit_steps,
+    job_order,
+    load_data,
+    preferred_law,
+)
+from .progress import RunProgress, begin, done
+
+__all__ = ["JOBS", "run_compare", "model_specs", "job_steps", "n_devices"]
+
+log = logging.getLogger("beadrod")
+
+
+def n_devices(cfg: dict[str, Any]) -> int:
+    """Host devices for ``cfg``'s chains (one per chain, at most 8)."""
+    return max(1, min(int(cfg["sampling"]["chains"]), 8))
+
+
+def model_specs(cfg: dict[str, Any], names: list[str] | None,
+                rung: str | None = None) -> dict[str, Any]:
+    """ModelSpec per law of ``names`` under ``cfg``: its rung (or ``rung``), its noise
+    model (likelihood.robust) and whether Q enters the likelihood (likelihood.use_q)."""
+    lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
+    return comparison_specs(names, rung or cfg["rung"], lik,
+                            use_q=bool(cfg["likelihood"]["use_q"]))
+
+
+def job_steps(job: Job) -> int:
+    """Progress steps a job reports (a fit: :func:`workflows.pipeline.fit_steps`)."""
+    return fit_steps(job.cfg) if job.kind == "fit" else 1
+
+
+# data and model inputs of a worker process, built once per (data, likelihood options)
+_DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
+
+
+class _Jobs:
+    """The job runner of compare, fit and rungs (workflows.parallel.JobRunner): "fit"
+    (pipeline.fit_law), "eta" (the eta draws of one extra viscoelastic NUTS fit,
+    compare_outputs.nuts_eta) and "ns" (nested-sampling evidence of a spec)."""
+
+    def run(self, job: Job, resume: bool, ds: Any, inputs: dict[str, Any]) -> Any:
+        if job.kind == "fit":
+            return fit_law(job.name, job.spec, inputs, ds, job.cfg, Path(job.out),
+                           resume=resume, job=job.key)
+        t0 = time.perf_counter()
+        if job.kind == "eta":
+            from .compare_outputs import nuts_eta
+
+            begin(log, job.key, "%s: NUTS for the tension", job.key)
+            value = nuts_eta(job.spec, inputs, job.cfg, job.seed_offset)
+        elif job.kind == "ns":
+            from inference.evidence import nested_sampling_log_z
+            from inference.numpyro_models import build_model
+
+            begin(log, job.key, "%s: nested sampling", job.key)
+            value = nested_sampling_log_z(build_model(job.spec), {"data": inputs},
+                                          num_live_points=job.cfg["evidence"]["live_points"],
+                                          seed=job.cfg["seed"])
+        else:
+            raise ValueError(f"unknown job kind {job.kind!r}")
+        done(log, job.key, "%s: done (%.0f s)", job.key, time.perf_counter() - t0,
+             final=True)
+        return value
+
+    def run_in_worker(self, job: Job, resume: bool) -> Any:
+        from inference.likelihood import model_inputs
+
+        from . import lawfiles
+
+        lawfiles.load(job.cfg.get("law_files") or [])  # the registry is per process
+
+        key = repr((job.cfg["data"], sorted(job.cfg["likelihood"].items())))
+        if key not in _DATA:
+            ds = load_data(job.cfg)
+            _DATA[key] = (ds, model_inputs(ds))
+        res = self.run(job, resume, *_DATA[key])
+        # a LawRun's InferenceData travels through its netCDF file, not through the pipe
+        return res.summary if job.kind == "fit" else res
+
+    def collect(self, job: Job, value: Any) -> Any:
+        if job.kind != "fit":
+            return value
+        from .idata_io import load_idata
+
+        return LawRun(job.name, value, load_idata(Path(job.out) / "idata" / f"{job.name}.nc"))
+
+
+JOBS = _Jobs()
+
+
+def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
+                law_names: list[str] | None = None) -> dict[str, Any]:
+    """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write all
+    outputs into ``out`` and return the result dict the report renders.
+
+    The fits (and the tension's extra fits) run in ``cfg['workers']`` processes side by
+    side (workflows.parallel; 1 = in this process); the numbers do not depend on it.
+    The tension needs both viscoelastic laws and Q in the likelihood (likelihood.use_q)."""
+    from inference.likelihood import model_inputs
+
+    from . import compare_outputs
+
+    t_start = time.perf_counter()
+    ds = load_data(cfg)
+    inputs = model_inputs(ds)
+    names = law_names if law_names is not None else cfg["laws"]
+    specs = model_specs(cfg, names)
+    lik = next(iter(specs.values())).likelihood
+    jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
+    pair = {"viscoelastic", "viscoelastic_split"} <= set(specs)
+    do_tension = cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"]
+    if cfg["tension"]["enabled"] and pair and not do_tension:
+        log.info("tension analysis skipped: it sets eta from Q against eta from the shift, "
+                 "and likelihood.use_q = false leaves Q out")
+    if do_tension:
+        jobs += compare_outputs.tension_jobs(cfg, out, specs["viscoelastic"].rung, lik)
+    jobs.sort(key=job_order)
+    workers = resolve_workers(cfg["workers"], len(jobs))
+    figures = bool(cfg["report"]["figures"])
+    total = sum(job_steps(j) for j in jobs) + int(do_tension) + int(figures) + 1
+    if workers > 1:
+        log.info("fitting %d models in %d worker processes", len(jobs), workers)
+    with RunProgress(total, len(jobs), what="fits"):
+        finished = run_jobs(jobs, runner=JOBS, workers=workers, ds=ds, inputs=inputs,
+                            resume=resume, n_devices=n_devices(cfg))
+        runs: dict[str, LawRun] = {name: finished[name] for name in specs}
+        timings: dict[str, Any] = {f"fit_{k}_s": r.summary["timings"]["total_s"]
+                                   for k, r in runs.items()}
+        timings["fits_wall_s"] = time.perf_counter() - t_start
+        timings["workers"] = workers
+        tension = None
+        if do_tension:
+            t0 = time.perf_counter()
+            begin(log, "tension", "tension analysis")
+            tension = compare_outputs.tension(runs, inputs, ds, cfg, out, finished, JOBS)
+            timings["tension_s"] = time.perf_counter() - t0
+            done(log, "tension", "tension analysis done (%.0f s)", timings["tension_s"])
+        laws = [r.summary for r in runs.values()]
+        pref, why = preferred_law(laws)
+        result = {
+            "title": "beadrod: contact-law comparison",
+            "beadrod_version": beadrod_version(),
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "data": compare_outputs.data_block(ds),
+            "laws": laws, "preferred": pref, "preferred_reason": why,
+            "tension": tension, "config": cfg,
+        }
+        # LOO-PIT per law and the per-protocol truth of a synthetic world (the report's)
+        result.update(compare_outputs.report_extras(runs, ds))
+        t0 = time.perf_counter()
+        result["figures"] = []
+        if figures:
+            begin(log, "figures", "figures")
+            result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out)
+            done(log, "figures", "figures done (%.0f s)", time.perf_counter() - t0)
+        timings["figures_s"] = time.perf_counter() - t0
+        timings["total_s"] = time.perf_counter() - t_start
+        result["timings"] = timings
+        begin(log, "report", "tables and report")
+        compare_outputs.write_outputs(result, out)
+        done(log, "report", "tables and report written")
+    return result
