@@ -24,7 +24,7 @@ parabola's. The energy gaps next to the turning points are formed without subtra
 nearly equal q (2h sin^2, 2h cos^2): with 256 nodes the nested nodes rounded onto qmax
 and the gap to 0 (NaN).
 
-Amplitude (DESIGN.md convention): x = first-harmonic amplitude of q,
+Amplitude (the project convention, what a vibrometer reads): x = first-harmonic amplitude of q,
 a1 = (4/T) int_0^(T/2) q(tau) cos(omega tau) dtau (the orbit is even about qmax), so
 x is not (qmax - qmin)/2. Frequency ratio omega/omega0 = 2 pi/T; the backbone is
 Delta f/f0 = 2 pi/T - 1 at first-harmonic amplitude x, found by a root solve in qmax.

@@ -2,7 +2,7 @@
 
 Common signature ``rungN_name(x, n=1.5, *, q_factor=50.0, **options) -> Delta f/f0``
 for a power-law contact F ~ delta^n under weight preload (Hertz n = 3/2);
-x = delta_a/delta0 is the first-harmonic amplitude of the overlap (DESIGN.md Sec. 3).
+x = delta_a/delta0 is the first-harmonic amplitude of the overlap (models.backbone).
 
 1. :func:`rung1_series`       Lindstedt-Poincare, leading x^2 term (models/backbone.py).
 2. :func:`rung2_first_order`  averaged tangent stiffness (models/shift.py, engineer A).
