@@ -37,7 +37,8 @@ w = k Omega, D_1 = i E Omega^2 the drive)
 
 which is models.hbm.residual when N = 0. The bead's displacement z/delta0 = E sin + v - q
 has first harmonic B = -iE - G(Omega) D_1 - mu C(Omega) F_1 - Q_1: delta_a = |B| delta0 is
-what the vibrometer reads (the amplitude convention of models.backbone); the overlap amplitude |Q_1| is also kept.
+what the vibrometer reads (the amplitude convention of models.backbone); the overlap
+amplitude |Q_1| is also kept.
 
 Contact law ("adhesion"): Hertz, or the plan's JKR/DMT force normalised by F0 through
 :class:`~models.oscillator.CustomLaw`; Maugis-Dugdale is simulated with the plan's bracket

@@ -25,7 +25,7 @@ def _paper(young):
 
 
 def test_effective_modulus_identical_bodies():
-    # 1/E* = 2 (1 - nu^2)/E for identical materials (DESIGN.md section 2).
+    # 1/E* = 2 (1 - nu^2)/E for identical materials (Johnson 1985, Eq. 4.22).
     assert float(effective_modulus(200e9, NU)) == pytest.approx(200e9 / (2 * (1 - NU**2)), rel=1e-15)
 
 
@@ -75,7 +75,7 @@ def test_powerlaw_preload_frequency_independent_of_c(n):
         d0 = powerlaw.static_overlap(weight, coeff=coeff, n=n)
         k0 = powerlaw.stiffness(d0, coeff=coeff, n=n)
         omega2 = float(k0 / mass)
-        # omega0^2 = n g / delta0 whatever C is (DESIGN.md section 2).
+        # omega0^2 = n g / delta0 whatever C is (models.powerlaw).
         assert omega2 == pytest.approx(n * G_STANDARD / float(d0), rel=1e-12)
 
 
