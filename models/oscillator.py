@@ -20,7 +20,8 @@ own displacement is w = z/delta0 = E sin(Omega tau) - q.
 Reported amplitude everywhere in the dynamics modules: x = first-harmonic amplitude
 of q at the drive frequency, i.e. delta_a/delta0 with delta = delta0 + delta_a sin(.)
 (the amplitude convention of models.backbone). Near resonance the bead's absolute first
-harmonic differs from it by the base motion E (= x/Q at the peak); both are returned where a sweep is measured.
+harmonic differs from it by the base motion E (= x/Q at the peak); both are returned
+where a sweep is measured.
 
 Contact laws are small equinox pytrees with a ``force(y, yd)`` method returning the
 normalised force g and a ``slope`` attribute s; every parameter is a differentiable
