@@ -316,8 +316,8 @@ def _law():
         description=("elastic sphere on a Greenwood-Williamson summit layer (Gaussian heights "
                      f"of rms sigma, Johnson's mu = {MU:g}); overlap counted from the "
                      "outermost summits. Not in the default comparison yet: its backbone "
-                     "table (16 Chebyshev nodes in ln delta0'/sigma) is off the exact "
-                     "backbone by up to 0.01-0.04 in Delta f/f0 (tests/test_shape_tables.py, "
+                     "table (32 Chebyshev nodes in ln delta0'/sigma) is off the exact "
+                     "backbone by up to 0.005-0.01 in Delta f/f0 (tests/test_shape_tables.py, "
                      "slow), far above the shift noise; fit it by name to explore"),
         params=(YOUNG, factor), force=_force, static_overlap=_overlap,
         # the protocols scatter by the elastic scale E* R^(1/2) (F/F' does not depend on it)

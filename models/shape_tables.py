@@ -78,6 +78,7 @@ class ShapeTable:
     p_lo: float
     p_hi: float
     held: str
+    m_cheb: int = _M_CHEB
 
 
 TABLES: dict[str, ShapeTable] = {
@@ -91,7 +92,7 @@ TABLES: dict[str, ShapeTable] = {
         "greenwood_williamson", _gw_kw, float(np.log(1.5)), float(np.log(1e4)),
         "D0' = delta0'/sigma > 1e4 is roughness below 1e-4 of the overlap (Hertz); D0' < 1.5 "
         "is a load carried by the summits above 4.5 sigma alone (sigma > ~10x the paper's "
-        "roughness)"),
+        "roughness)", m_cheb=32),
 }
 """The tabulated laws and their shape coordinates."""
 _TABLES: dict[str, dict[str, np.ndarray]] = {}
@@ -156,7 +157,7 @@ def spec(name: str) -> surrogate.BackboneSpec:
         p_lo=tab.p_lo, p_hi=tab.p_hi, exact=exact,
         kink=lambda p: tuple(np.asarray(v) for v in kink(jnp.asarray(p))),
         lindstedt=lambda p: np.asarray(lindstedt(jnp.asarray(p))),
-        x_max=X_MAX, m_cheb=_M_CHEB, n_knots=_N_KNOTS)
+        x_max=X_MAX, m_cheb=tab.m_cheb, n_knots=_N_KNOTS)
 
 
 def build_table(names: tuple[str, ...] = tuple(TABLES)) -> dict[str, np.ndarray]:
