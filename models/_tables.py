@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -13,7 +13,8 @@ __all__ = ["rebuild_cli"]
 
 
 def rebuild_cli(argv: list[str] | None, *, prog: str, description: str,
-                build: Callable[[], dict[str, np.ndarray]], path: pathlib.Path) -> int:
+                build: Callable[..., dict[str, np.ndarray]], path: pathlib.Path,
+                parts: Sequence[str] | None = None) -> int:
     """Parse ``--rebuild [--out FILE]``; rebuild the table with float64 JAX and write it
     atomically (temporary file, then rename)."""
     p = argparse.ArgumentParser(prog=prog, description=description)
@@ -21,6 +22,9 @@ def rebuild_cli(argv: list[str] | None, *, prog: str, description: str,
                    help=f"recompute the table and write {path}")
     p.add_argument("--out", type=pathlib.Path, default=path,
                    help="where to write the table (default: the packaged file)")
+    if parts is not None:  # a file holding several laws' tables: rebuild some of them
+        p.add_argument("--law", action="append", choices=list(parts),
+                       help="rebuild only this law's table (repeatable; default: all)")
     args = p.parse_args(argv)
     if not args.rebuild:
         p.print_help()
@@ -29,7 +33,7 @@ def rebuild_cli(argv: list[str] | None, *, prog: str, description: str,
 
     jax.config.update("jax_enable_x64", True)
     t0 = time.perf_counter()
-    table = build()
+    table = build() if parts is None else build(tuple(args.law or parts))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.out.with_name(args.out.name + ".tmp.npz")
     np.savez(tmp, **table)

@@ -27,9 +27,7 @@ Regenerate (deterministic; minutes per law on 2 cores)::
 
 from __future__ import annotations
 
-import argparse
 import pathlib
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -39,6 +37,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from . import surrogate
+from ._tables import rebuild_cli
 
 __all__ = ["X_MAX", "TABLE_PATH", "TABLES", "ShapeTable", "backbone_fast", "exact_backbone",
            "load_table", "build_table", "spec"]
@@ -192,22 +191,9 @@ def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
 
 
 def _main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m models.shape_tables", description=__doc__)
-    ap.add_argument("--rebuild", action="store_true", help=f"recompute and write {TABLE_PATH}")
-    ap.add_argument("--law", action="append", choices=list(TABLES),
-                    help="rebuild only this law's table (repeatable; default: all)")
-    args = ap.parse_args(argv)
-    if not args.rebuild:
-        ap.print_help()
-        return 0
-    jax.config.update("jax_enable_x64", True)
-    t0 = time.perf_counter()
-    table = build_table(tuple(args.law or TABLES))
-    tmp = TABLE_PATH.with_name(TABLE_PATH.name + ".tmp.npz")
-    np.savez(tmp, **table)
-    tmp.replace(TABLE_PATH)
-    print(f"wrote {TABLE_PATH} in {time.perf_counter() - t0:.1f} s")
-    return 0
+    return rebuild_cli(argv, prog="python -m models.shape_tables",
+                       description="Tabulated backbones of the one-shape-parameter laws.",
+                       build=build_table, path=TABLE_PATH, parts=tuple(TABLES))
 
 
 if __name__ == "__main__":
