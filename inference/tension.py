@@ -98,18 +98,23 @@ def analyse_tension(
     log_z_shared: Sequence[float] | None = None,
     log_z_split: Sequence[float] | None = None,
     seed: int = 0,
+    param: str = "eta",
 ) -> dict[str, Any]:
     """The tension statistics (module docstring) from the four fits' results.
 
     ``eta_q`` and ``eta_shift`` [Pa s] are the draws of the Q-only and shift-only fits
     (``eta_shift`` is ignored, and may be None, on a rung where eta does not enter the
     shift); ``shared`` and ``split`` the joint fits' InferenceData (with posterior
-    predictive draws); ``log_z_*`` their (log Z, error) [nats] when computed. JSON-ready.
+    predictive draws); ``log_z_*`` their (log Z, error) [nats] when computed. ``param``:
+    the loss parameter's name in the shared fit (models.law.ContactLaw.tension_param);
+    the split fit carries it as ``<param>_shift`` and ``<param>_q``. The keys say eta
+    whatever ``param`` is called. JSON-ready.
     """
     in_shift = rung in ETA_IN_SHIFT
     if in_shift and eta_shift is None:
         raise ValueError(f"rung {rung!r}: eta enters the shift, the shift-only draws are needed")
     post_split = split.posterior
+    e_shift, e_q = f"{param}_shift", f"{param}_q"
     ppc = {"shift": ppc_failure(shared, "shift_obs"), "q": ppc_failure(shared, "q_obs", log=True)}
     log_bf = log_bf_err = None
     if log_z_shared is not None and log_z_split is not None:
@@ -118,12 +123,12 @@ def analyse_tension(
         "rung": rung, "eta_in_shift": in_shift,
         "eta_shift_q05_q50_q95": _triple(eta_shift) if in_shift else None,
         "eta_q_q05_q50_q95": _triple(eta_q),
-        "eta_joint_q05_q50_q95": _triple(shared.posterior["eta"]),
-        "eta_split_shift_q05_q50_q95": _triple(post_split["eta_shift"]),
-        "eta_split_q_q05_q50_q95": _triple(post_split["eta_q"]),
+        "eta_joint_q05_q50_q95": _triple(shared.posterior[param]),
+        "eta_split_shift_q05_q50_q95": _triple(post_split[e_shift]),
+        "eta_split_q_q05_q50_q95": _triple(post_split[e_q]),
         "log10_gap_q05_q50_q95": log10_gap(eta_shift, eta_q, seed) if in_shift else None,
-        "p_shift_gt_q": (float(np.mean(np.asarray(post_split["eta_shift"])
-                                       > np.asarray(post_split["eta_q"]))) if in_shift else None),
+        "p_shift_gt_q": (float(np.mean(np.asarray(post_split[e_shift])
+                                       > np.asarray(post_split[e_q]))) if in_shift else None),
         "log_bf_split_vs_shared": log_bf, "log_bf_err": log_bf_err,
         "ppc": {"shift_p": ppc["shift"]["p_value"], "q_p": ppc["q"]["p_value"],
                 "missed": min(ppc, key=lambda k: (ppc[k]["p_value"],

@@ -11,9 +11,10 @@ import importlib
 
 __all__ = [
     "adhesion", "autotable", "backbone", "backbone_table", "dmt", "generic",
-    "greenwood_williamson", "hbm", "hertz", "jkr", "ladder", "law", "lawfile", "materials",
-    "maugis_dugdale", "oscillator", "plan", "powerlaw", "registry", "rod", "rungs", "scenes",
-    "shape_tables", "shift", "simulate", "surrogate", "timeint", "viscoelastic",
+    "greenwood_williamson", "hbm", "hertz", "jkr", "jkr_contact", "jkr_table", "ladder", "law",
+    "lawfile", "materials", "maugis_dugdale", "oscillator", "plan", "powerlaw", "registry",
+    "rod", "rungs", "scenes", "shape_backbone", "shape_tables", "shift", "simulate",
+    "surrogate", "timeint", "viscoelastic",
 ]
 
 

@@ -103,9 +103,9 @@ def _build(law: ContactLaw, kw: dict) -> dict:
         return np.asarray(exact_jit(jnp.asarray(np.resize(x, _KNOTS))))[:x.size]
 
     def kink(p):
-        qc = generic.contact_loss_turning_point(law, delta0=d0, **kw)
-        om, a1, _ = generic.backbone_orbit(law, qc * (1.0 - 1e-12), delta0=d0, **kw)
-        return np.full(p.shape, float(a1)), np.full(p.shape, float(om) - 1.0)
+        # on the flight side of the onset (generic.contact_loss_onset says why)
+        a1, s1 = generic.contact_loss_onset(law, delta0=d0, **kw)
+        return np.full(p.shape, float(a1)), np.full(p.shape, float(s1))
 
     c = float(generic.lindstedt_coefficient(law, delta0=d0, **kw))
     spec = surrogate.BackboneSpec(

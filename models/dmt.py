@@ -172,7 +172,7 @@ def overlap_from_frequency(
 def _law():
     from .backbone_table import X_MAX
     from .law import GAMMA, YOUNG, ContactLaw
-    from .shape_tables import backbone_fast
+    from .shape_backbone import backbone_fast
     from .shift import first_order_hertz
 
     def ratio(kw):
@@ -195,6 +195,8 @@ def _law():
         # overlap) the average is exactly the Hertz one
         shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
                 "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw))},
+        # relative fit time (models.law.ContactLaw.cost): two-parameter backbone table
+        cost=2.0,
     )
 
 

@@ -41,10 +41,13 @@ from .quadrature import bisect, polish, tanh_sinh
 
 __all__ = ["static_overlap", "overlap_from_frequency", "stiffness", "first_order_shift",
            "restoring_force", "backbone_orbit", "backbone_shift", "lindstedt_coefficient",
-           "contact_loss_turning_point"]
+           "contact_loss_turning_point", "contact_loss_onset"]
 
 _LOG_LO, _LOG_HI = np.log(1e-14), np.log(1e-2)   # overlaps bracketed in [1e-14, 1e-2] m
-_U, _W = tanh_sinh(49, h=5.6 / 48)
+# the divided differences of P: 49 nodes left up to 1e-6 in (P(b) - P(a))/(b - a) for the
+# Greenwood-Williamson force (a C4 spline in D, ~100 knots in [-1, qc]; 2e-6 in its
+# backbone, and contact-or-flight misjudged next to the onset); 97 nodes: 4e-9
+_U, _W = tanh_sinh(97, h=5.6 / 96)
 _FO_RULE = tanh_sinh(81, h=7.6 / 80)   # tails to 1e-16 of the ends: t^(n-1) at x = 1
 
 
@@ -157,6 +160,18 @@ def contact_loss_turning_point(law: Any, *, delta0: Any, **kw: Any) -> jnp.ndarr
     p_edge = -divided(-1.0, 0.0)          # P(-1) = -(P(0) - P(-1))
     g = lambda q: q * divided(jnp.zeros_like(q), q) - p_edge
     return bisect(g, jnp.asarray(1e-9), jnp.asarray(50.0), iters=80)
+
+
+def contact_loss_onset(law: Any, *, delta0: Any, **kw: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(x_c, Delta f/f0 at x_c) [-]: the backbone where contact loss starts, taken on the
+    orbit through qmax_c (1 + 1e-6), which flies for a flight time ~1e-3. Not at qmax_c
+    itself: there the contact-or-flight test and the lower turning point's bracket compare
+    energies equal to within the quadrature's rounding (~1e-12), and picked the wrong branch
+    (x_c alternating between 0.92 and 0.84 from one Greenwood-Williamson table node to the
+    next). S is C1 at x_c, so the shifted point only moves the split by ~1e-6."""
+    qc = contact_loss_turning_point(law, delta0=delta0, **kw)
+    om, a1, _ = backbone_orbit(law, qc * (1.0 + 1e-6), delta0=delta0, **kw)
+    return a1, om - 1.0
 
 
 def lindstedt_coefficient(law: Any, *, delta0: Any, **kw: Any) -> jnp.ndarray:

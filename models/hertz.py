@@ -77,6 +77,7 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike) -> j
 def _law():
     from .backbone_table import backbone_shift_clipped
     from .law import YOUNG, ContactLaw
+    from .rungs import LADDER
     from .shift import first_order_hertz
 
     return ContactLaw(
@@ -90,7 +91,7 @@ def _law():
         overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
             f0, load, mass),
         # the paper analysed this law at first order: its 'paper_eq25' rung is first order
-        rungs=("first_order", "backbone", "paper_eq25"),
+        rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": lambda x, **_: first_order_hertz(x),
                 "paper_eq25": lambda x, **_: first_order_hertz(x),
                 "backbone": lambda x, **_: backbone_shift_clipped(x, EXPONENT)},

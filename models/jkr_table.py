@@ -1,6 +1,6 @@
 """Tabulated JKR first-order shift, fast enough for NUTS and nested sampling.
 
-:func:`shift_first_order_fast` reproduces :func:`models.jkr.shift_first_order` (the
+:func:`shift_first_order_fast` reproduces :func:`models.jkr_contact.shift_first_order` (the
 averaged tangent stiffness of the JKR unloading branch, K clipped to 0 where the overlap
 is <= 0) from a table computed once by that quadrature and stored in
 ``models/data/jkr_table.npz``.
@@ -21,10 +21,11 @@ in [0, sqrt(X_MAX - 1)] past x = 1, where the stiffness K(0+) > 0 of JKR switche
 inside the cycle and the shift gains a term ~ -(x - 1)^(1/2) (smooth in w); and
 q = ln r in [ln R_MIN, ln R_MAX]. In each region a tensor-product cubic spline
 (not-a-knot, scipy.interpolate.CubicSpline along x, then along q) on knots graded
-quadratically towards x = 1. Samples: models.jkr.shift_first_order (tanh-sinh, 81
-nodes). Beyond the q range the value is held at the end (r > R_MAX is Hertz to within
-the measured 1e-5 at x = 1; r < R_MIN means gamma beyond any steel); beyond X_MAX it is
-held too (callers clip); x < 0 uses |x| (the shift is even in the amplitude).
+quadratically towards x = 1. Samples: models.jkr_contact.shift_first_order (tanh-sinh,
+81 nodes; the mechanics, not the law module models.jkr, which imports this table).
+Beyond the q range the value is held at the end (r > R_MAX is Hertz to within the
+measured 1e-5 at x = 1; r < R_MIN means gamma beyond any steel); beyond X_MAX it is held
+too (callers clip); x < 0 uses |x| (the shift is even in the amplitude).
 
 Regenerate (deterministic)::
 
@@ -42,6 +43,7 @@ from jax.typing import ArrayLike
 
 from ._math import knot_cell
 from ._tables import rebuild_cli
+from .jkr_contact import shift_first_order
 
 __all__ = ["X_MAX", "R_MIN", "R_MAX", "TABLE_PATH", "load_ratio", "shift_first_order_fast",
            "build_table", "load_table", "reference_shift"]
@@ -65,8 +67,6 @@ def load_ratio(load: ArrayLike, *, gamma: ArrayLike, radius: ArrayLike) -> jnp.n
 
 def reference_shift(x: np.ndarray, r: np.ndarray) -> np.ndarray:
     """The quadrature the table reproduces, at load 1 N, R = 1 cm, E* = 100 GPa."""
-    from .jkr import shift_first_order
-
     radius = 0.01
     gamma = 1.0 / (3.0 * np.pi * np.asarray(r) * radius)
     return np.asarray(shift_first_order(jnp.asarray(x), load=1.0, e_star=1e11, radius=radius,

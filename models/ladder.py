@@ -28,7 +28,7 @@ from jax.typing import ArrayLike
 
 from . import hbm, timeint
 from .backbone import backbone_shift, lindstedt_shift
-from .oscillator import PowerLaw
+from .oscillator import ContactLaw, PowerLaw
 
 __all__ = [
     "rung1_series",
@@ -36,6 +36,12 @@ __all__ = [
     "rung3_backbone",
     "rung4_hbm",
     "rung5_timeint",
+    "hbm_peak_solution",
+    "check_peak",
+    "first_peak",
+    "START_PHASES",
+    "hbm_peak",
+    "timeint_peak",
     "RUNGS",
     "compare_rungs",
 ]
@@ -72,25 +78,77 @@ def _law(n, q_factor):
     return PowerLaw(n=n, zeta=0.5 / q_factor)
 
 
+START_PHASES = (0.0, 0.5 * np.pi, -0.5 * np.pi, np.pi)
+"""Time shifts (drive phase [rad]) of the backbone orbit the peak solve starts from."""
+
+
 @partial(jax.jit, static_argnames=("harmonics",))
-def _hbm_peak_jit(x, n, q_factor, harmonics):
-    law = _law(n, q_factor)
-    om_b, x_b = hbm.backbone(PowerLaw(n=n, zeta=0.0), x, omega_guess=1.0 + backbone_shift(x, n),
-                             harmonics=harmonics)
-    om, e, coeffs = hbm.peak_at_amplitude(law, x, omega_guess=om_b, x_guess=x_b,
-                                          harmonics=harmonics)
-    res = jnp.max(jnp.abs(hbm.residual(coeffs, om, e, law, harmonics)))
+def hbm_peak_solution(law: ContactLaw, conservative: ContactLaw, x: ArrayLike,
+                      omega_guess: ArrayLike, harmonics: int, phase: ArrayLike = 0.0):
+    """(Omega_peak, drive E, max |residual|, X) of the forced response of ``law`` whose
+    peak has amplitude x: Newton on the peak system (:func:`models.hbm.peak_at_amplitude`)
+    started from the HBM backbone of ``conservative`` (the same force without damping,
+    itself started at ``omega_guess``), shifted in time by ``phase``/Omega.
+    Unchecked: :func:`check_peak` checks the residual."""
+    h = harmonics
+    om_b, x_b = hbm.backbone(conservative, x, omega_guess=omega_guess, harmonics=h)
+    k = jnp.arange(1, h + 1)
+    a, b = x_b[1::2], x_b[2::2]      # q(theta) -> q(theta + phase), harmonic by harmonic
+    c, s = jnp.cos(k * phase), jnp.sin(k * phase)
+    start = x_b.at[1::2].set(a * c + b * s).at[2::2].set(b * c - a * s)
+    om, e, coeffs = hbm.peak_at_amplitude(law, x, omega_guess=om_b, x_guess=start,
+                                          harmonics=h)
+    res = jnp.max(jnp.abs(hbm.residual(coeffs, om, e, law, h)))
     return om, e, res, coeffs
+
+
+def check_peak(x: float, solution) -> tuple[float, float, jnp.ndarray]:
+    """(Omega_peak, E, X) of a :func:`hbm_peak_solution`; RuntimeError unless it converged
+    (residual < 1e-8, E != 0, everything finite) -- never a NaN shift. E < 0 is the same
+    orbit half a drive period later (theta -> theta + pi flips the sign of sin theta), so
+    its Omega_peak is as good."""
+    om, e, res, coeffs = solution
+    ok = (float(res) < 1e-8 and abs(float(e)) > 0 and np.isfinite(float(om))
+          and bool(jnp.all(jnp.isfinite(coeffs))))
+    if not ok:
+        raise RuntimeError(f"HBM peak solve failed at x = {x} (residual {float(res):.2e})")
+    return float(om), float(e), coeffs
+
+
+def first_peak(x: float, solve) -> tuple[float, float, jnp.ndarray]:
+    """The first converged ``solve(phase)`` over :data:`START_PHASES` (checked).
+
+    Past contact loss the peak system is nearly singular and Newton from the backbone
+    orbit may fail; started from the same orbit shifted by a quarter or half period it
+    often converges. Below contact loss the first start converges (a single solve)."""
+    err = None
+    for phase in START_PHASES:
+        try:
+            return check_peak(x, solve(jnp.asarray(phase)))
+        except RuntimeError as exc:
+            err = exc
+    raise RuntimeError(f"{err}, from {len(START_PHASES)} starting phases") from None
+
+
+def hbm_peak(law: ContactLaw, conservative: ContactLaw, x: float, *, omega_guess: float,
+             harmonics: int = 3) -> tuple[float, float, jnp.ndarray]:
+    """Checked :func:`hbm_peak_solution`: (Omega_peak, E, X) or RuntimeError."""
+    xj, gj = jnp.asarray(x, float), jnp.asarray(omega_guess, float)
+    return first_peak(x, lambda p: hbm_peak_solution(law, conservative, xj, gj, harmonics, p))
+
+
+@partial(jax.jit, static_argnames=("harmonics",))
+def _hbm_peak_jit(x, n, q_factor, harmonics, phase):
+    return hbm_peak_solution(_law(n, q_factor), PowerLaw(n=n, zeta=0.0), x,
+                             1.0 + backbone_shift(x, n), harmonics, phase)
 
 
 def _hbm_peak(x, n, q_factor, harmonics, with_coeffs=False):
     """(Omega_peak, drive E) whose resonance peak has amplitude x: Newton on the peak
     system started from the conservative HBM backbone; raises if it did not converge."""
-    om, e, res, coeffs = _hbm_peak_jit(jnp.asarray(x, float), jnp.asarray(n, float), q_factor,
-                                       harmonics)
-    if not (float(res) < 1e-8 and float(e) > 0):
-        raise RuntimeError(f"HBM peak solve failed at x = {x} (residual {float(res):.2e})")
-    return (float(om), float(e), coeffs) if with_coeffs else (float(om), float(e))
+    xj, nj = jnp.asarray(x, float), jnp.asarray(n, float)
+    om, e, coeffs = first_peak(x, lambda p: _hbm_peak_jit(xj, nj, q_factor, harmonics, p))
+    return (om, e, coeffs) if with_coeffs else (om, e)
 
 
 def rung4_hbm(x: ArrayLike, n: ArrayLike = 1.5, *, q_factor: float = 50.0,
@@ -98,7 +156,7 @@ def rung4_hbm(x: ArrayLike, n: ArrayLike = 1.5, *, q_factor: float = 50.0,
     """Rung 4: Omega_peak - 1 of the forced response whose peak amplitude is x (HBM, H).
 
     Newton on (R = 0, dA/dOmega = 0 along the branch, A = x) from the conservative HBM
-    backbone (:func:`models.hbm.peak_at_amplitude`).
+    backbone (:func:`models.hbm.peak_at_amplitude`; :func:`first_peak`).
     """
     return np.asarray([_hbm_peak(float(v), n, q_factor, harmonics)[0] - 1.0
                        for v in np.atleast_1d(np.asarray(x, float))])
@@ -125,11 +183,21 @@ def _ti_sweep(law, drive, grid, y0, settle, steps, use_scipy, rtol):
     return amp[: drop[0] + 1] if drop.size else amp
 
 
-def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, rtol=1e-8):
-    law = _law(n, q_factor)
-    # drive and starting state from H = 3 (cheap; the sweep settles the rest and the
-    # amplitude mismatch is corrected along the backbone slope)
-    om_pk, drive, x_pk = _hbm_peak(x, n, q_factor, 3, with_coeffs=True)
+def timeint_peak(law: ContactLaw, peak: tuple[float, float, jnp.ndarray], q_factor: float, *,
+                 points: int = 13, span: float = 0.06, settle: int | None = None,
+                 steps: int = 128, use_scipy: bool = False,
+                 rtol: float = 1e-8) -> tuple[float, float]:
+    """(Omega, x) of the resonance a stepped down-sweep of ``law`` measures.
+
+    ``peak`` = (Omega_peak, E, X) of the H = 3 harmonic balance (:func:`hbm_peak`): the
+    drive E and the starting state on the upper branch; ``points`` frequencies over
+    +-``span``/Q around Omega_peak, each settled for ``settle`` periods (default 2 Q),
+    lock-in over 2 periods, then a pass 12x finer around the largest reading; the
+    resonance is the parabola through it and its neighbours (:func:`models.timeint.resonance`).
+    RuntimeError if a reading is not finite.
+    """
+    settle = int(2 * q_factor) if settle is None else settle
+    om_pk, drive, x_pk = peak
     h = 2.0 * span / q_factor / (points - 1)
     start = om_pk + span / q_factor
     for _ in range(2):          # coarse pass, then a pass 12x finer around the maximum
@@ -137,11 +205,22 @@ def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, 
         coeffs = hbm.solve(law, drive, grid[0], x_pk, harmonics=3)   # upper branch
         y0 = _state_at(coeffs, grid[0])
         amp = _ti_sweep(law, drive, grid, y0, settle, steps, use_scipy, rtol)
+        if not np.all(np.isfinite(amp)):
+            raise RuntimeError(f"time integration gave a non-finite amplitude near Omega = "
+                               f"{om_pk:.6g} (drive E = {drive:.3g})")
         i = int(np.argmax(amp))
         start, h = grid[max(i - 1, 0)], 2.0 * h / (points - 1)
     g = grid[: amp.size]
     om_ti, x_ti = timeint.resonance(g, amp) if amp.size >= 3 else (g[i], amp[i])
     return float(om_ti), float(x_ti)
+
+
+def _rung5_one(x, n, q_factor, *, points, span, settle, steps, use_scipy=False, rtol=1e-8):
+    # drive and starting state from H = 3 (cheap; the sweep settles the rest and the
+    # amplitude mismatch is corrected along the backbone slope)
+    peak = _hbm_peak(x, n, q_factor, 3, with_coeffs=True)
+    return timeint_peak(_law(n, q_factor), peak, q_factor, points=points, span=span,
+                        settle=settle, steps=steps, use_scipy=use_scipy, rtol=rtol)
 
 
 def rung5_timeint(x: ArrayLike, n: ArrayLike = 1.5, *, q_factor: float = 50.0,

@@ -40,6 +40,8 @@ from typing import Any
 
 import jax.numpy as jnp
 
+from .rungs import LADDER
+
 __all__ = ["Prior", "Param", "ContactLaw", "SCENE_KEYS", "RungUnavailable", "effective_modulus",
            "prior_median"]
 
@@ -137,10 +139,18 @@ class ContactLaw:
     * ``contact_edge(**kw)`` -> the overlap [m] below which the surfaces separate
       (default 0: unilateral contact; adhesive laws hold on to negative overlaps).
 
-    ``rungs``: the rungs the law can be fitted at; those without a ``shifts`` entry are
-    served by :mod:`models.generic` (exact, slow). ``in_default_comparison`` False keeps a
-    law out of ``beadrod compare`` unless it is asked for by name (the law says why in
-    its ``description``).
+    ``rungs``: the rungs the law computes (those of :data:`models.rungs.FIT_RUNGS` are the
+    ones it can be fitted at); those without a ``shifts`` entry are served by
+    :mod:`models.generic` and :mod:`models.generic_dynamics` (exact, slow).
+    ``in_default_comparison`` False keeps a law out of ``beadrod compare`` unless it is
+    asked for by name (the law says why in its ``description``).
+
+    ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
+    behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
+    ``tension_param`` names the loss parameter of the shared law, which the split law
+    carries as ``<tension_param>_shift`` and ``<tension_param>_q``. ``cost``: a fit's
+    relative wall time (1 = a closed-form law), used only to start the costliest fits
+    first.
     """
 
     name: str
@@ -148,7 +158,7 @@ class ContactLaw:
     reference: str
     params: tuple[Param, ...]
     force: Callable[..., Any]
-    rungs: tuple[str, ...] = ("first_order", "backbone")
+    rungs: tuple[str, ...] = LADDER
     shifts: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     static_overlap: Callable[..., Any] | None = None
     overlap_from_frequency: Callable[..., Any] | None = None
@@ -159,6 +169,8 @@ class ContactLaw:
     description: str = ""
     tension_role: str | None = None
     in_default_comparison: bool = True
+    tension_param: str | None = None
+    cost: float = 1.0
 
     # ------------------------------------------------------------------ parameters
     @property
@@ -214,7 +226,9 @@ class ContactLaw:
         ``kw`` are resolved keywords plus ``delta0`` [m] (the overlap x refers to; the
         law's static overlap under ``load`` when absent) and ``omega0`` [rad/s].
         A fast path is used when the law has one; otherwise the generic quadrature of
-        :mod:`models.generic` (exact, but far too slow for a sampler).
+        :mod:`models.generic` (exact, but far too slow for a sampler), or for 'series',
+        'harmonic_balance' and 'time_integration' :mod:`models.generic_dynamics` (options
+        ``q_factor``, ``harmonics``, ... there).
         """
         if rung not in self.rungs:
             raise RungUnavailable(
@@ -230,6 +244,12 @@ class ContactLaw:
             return generic.first_order_shift(self, x, **kw)
         if rung == "backbone":
             return generic.backbone_shift(self, x, **kw)
+        from . import generic_dynamics as dyn
+
+        run = {"series": dyn.series_shift, "harmonic_balance": dyn.hbm_shift,
+               "time_integration": dyn.timeint_shift}.get(rung)
+        if run is not None:
+            return run(self, x, **kw)
         raise RungUnavailable(f"law '{self.name}': rung {rung!r} has no generic form; "
                               "give it in the law's shifts")
 

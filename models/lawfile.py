@@ -115,7 +115,7 @@ def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
         name=name, label=str(getattr(mod, "LABEL", name)),
         reference=str(getattr(mod, "REFERENCE", f"user law file {path.name}")),
         description=str(getattr(mod, "DESCRIPTION", "")), params=law_params,
-        force=user_force, source=str(path), rungs=("first_order", "backbone"))
+        force=user_force, source=str(path))
     _check_force(path, law, scene, adhesive=bool(getattr(mod, "ADHESIVE", False)))
     return attach_fast_backbone(law, scene)
 

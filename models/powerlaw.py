@@ -81,6 +81,7 @@ def _law():
 
     from .backbone_table import backbone_shift_clipped
     from .law import ContactLaw, Param, Prior
+    from .rungs import LADDER
     from .shift import first_order_powerlaw
 
     n = Param("n", "-", r"$n$", Prior("uniform", 1.0, 3.0),
@@ -106,7 +107,7 @@ def _law():
         overlap_from_frequency=lambda f0, *, load, mass, n, **_: overlap_from_frequency(
             f0, load, mass, n),
         # the paper analysed this law at first order: its 'paper_eq25' rung is first order
-        rungs=("first_order", "backbone", "paper_eq25"),
+        rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),
                 "paper_eq25": lambda x, *, n, **_: first_order_powerlaw(x, n),
                 "backbone": lambda x, *, n, **_: backbone_shift_clipped(x, n)},

@@ -12,13 +12,14 @@ Rungs (:data:`RUNGS`, one spelling everywhere) are the levels of the accuracy la
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterable
 
 from . import dmt, greenwood_williamson, hertz, jkr, maugis_dugdale, powerlaw, viscoelastic
 from .law import ContactLaw, RungUnavailable
 from .rungs import DEFAULT_RUNG, FIT_RUNGS, RUNGS, check_rung
 
 __all__ = ["RUNGS", "FIT_RUNGS", "DEFAULT_RUNG", "laws", "law_names", "get_law", "register",
-           "unregister", "check_rung", "ContactLaw", "RungUnavailable"]
+           "unregister", "tension_pair", "check_rung", "ContactLaw", "RungUnavailable"]
 
 _BUILTIN: tuple[ContactLaw, ...] = (hertz.LAW, powerlaw.LAW, viscoelastic.LAW,
                                     viscoelastic.SPLIT_LAW, jkr.LAW, dmt.LAW,
@@ -43,6 +44,21 @@ def get_law(name: str) -> ContactLaw:
         hint = f" (did you mean '{close[0]}'?)" if close else ""
         raise ValueError(f"unknown contact law '{name}'{hint}; choose from "
                          f"{list(_LAWS)}") from None
+
+
+def tension_pair(names: Iterable[str] | None = None) -> tuple[str, str] | None:
+    """(shared, split): the names of the laws behind the Q-versus-shift tension, the
+    first registered law whose ``tension_role`` is 'shared' and the first 'split' law
+    with the same ``tension_param``, both among ``names`` (default: every law); None if
+    ``names`` lack either."""
+    wanted = None if names is None else set(names)
+    pool = [law for law in laws() if wanted is None or law.name in wanted]
+    for shared in (law for law in pool if law.tension_role == "shared"):
+        split = next((law for law in pool if law.tension_role == "split"
+                      and law.tension_param == shared.tension_param), None)
+        if split is not None and shared.tension_param is not None:
+            return shared.name, split.name
+    return None
 
 
 def register(law: ContactLaw, *, replace: bool = False) -> ContactLaw:

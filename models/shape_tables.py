@@ -17,17 +17,30 @@ E* drops out of all three (the tests check the invariance). The tables are built
 of each law's force. Outside a law's p range the value is held at the end (each entry of
 :data:`TABLES` says what that means physically); x beyond X_MAX = 2 is held too. JKR and
 DMT contact is taken to part at delta = 0 (where the approach branch forms it; the
-snap-off hysteresis is a loss, not a stiffness). Errors against the generic exact backbone:
-tests/test_shape_tables.py.
+snap-off hysteresis is a loss, not a stiffness). Errors against the generic exact backbone
+(tests/test_shape_tables.py): JKR and DMT within 2e-6 in Delta f/f0.
 
-Regenerate (deterministic; minutes per law on 2 cores)::
+Greenwood-Williamson: three pieces in p (D0' in [1.5, 4], [4, 16], [16, 1e4]; 16, 24
+and 16 Chebyshev nodes), stated error 3e-5 in Delta f/f0 (tested). Measured on 100 D0' x
+4 amplitudes (0.3, 0.8, 0.95, 1.5) against the 48-node exact backbone: at most 1.1e-5, at
+x = 0.8 near D0' = 40, where the corner of Hertz contact loss (smoothed over sigma, at
+q = -1 + 6/D0') crosses the contact arc as p changes; <= 1.5e-7 in the two lower pieces
+and at the other amplitudes. The table it replaced erred by up to 0.057: its contact-loss
+point (models.generic.contact_loss_onset) took the wrong branch at every other node, and
+one interpolant over the whole range could not follow the knee at D0 = D0' - 6 ~ -1.
 
-    python -m models.shape_tables --rebuild [--law jkr|dmt|gw]
+This module builds the tables from the laws (it imports them); the laws' backbone rungs
+read them through :mod:`models.shape_backbone` (:func:`backbone_fast`, :func:`load_table`,
+re-exported here), which imports no law: the dependency runs one way.
+
+Regenerate (deterministic; minutes per law on 2 cores, 44 min for the Greenwood-Williamson
+table on 2 shared cores)::
+
+    python -m models.shape_tables --rebuild [--law jkr|dmt|greenwood_williamson]
 """
 
 from __future__ import annotations
 
-import pathlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -36,14 +49,14 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
-from . import surrogate
+from . import dmt, hertz, jkr, surrogate
+from . import greenwood_williamson as gw
 from ._tables import rebuild_cli
+from .shape_backbone import TABLE_PATH, X_MAX, backbone_fast, load_table
 
 __all__ = ["X_MAX", "TABLE_PATH", "TABLES", "ShapeTable", "backbone_fast", "exact_backbone",
            "load_table", "build_table", "spec"]
 
-X_MAX = 2.0
-TABLE_PATH = pathlib.Path(__file__).with_name("data") / "shape_tables.npz"
 # table grid and the orbit rule used to build it: 24 Gauss nodes are spectrally accurate on
 # the contact arc (the flight arc's graded rule is fixed); the tests measure the table
 # against the 48-node exact backbone
@@ -57,9 +70,6 @@ def _jkr_kw(r, per_gamma):
 
 
 def _gw_kw(d0e):
-    from . import greenwood_williamson as gw
-    from . import hertz
-
     load, radius, e_star = 0.158, 7.938e-3, 1.2e11
     d_h = hertz.static_overlap(load, e_star=e_star, radius=radius)
     sigma = d_h / gw.reduced_hertz_approach(jnp.asarray(d0e, float) - gw.SUMMIT_CUTOFF)
@@ -78,6 +88,8 @@ class ShapeTable:
     p_hi: float
     held: str
     m_cheb: int = _M_CHEB
+    p_breaks: tuple[float, ...] = ()
+    m_pieces: tuple[int, ...] = ()
 
 
 TABLES: dict[str, ShapeTable] = {
@@ -91,17 +103,23 @@ TABLES: dict[str, ShapeTable] = {
         "greenwood_williamson", _gw_kw, float(np.log(1.5)), float(np.log(1e4)),
         "D0' = delta0'/sigma > 1e4 is roughness below 1e-4 of the overlap (Hertz); D0' < 1.5 "
         "is a load carried by the summits above 4.5 sigma alone (sigma > ~10x the paper's "
-        "roughness)", m_cheb=32),
+        "roughness)",
+        # D0 = D0' - 6 ~ -1 (D0' 4-16): the load passes from the summits' Gaussian tail to
+        # the Hertz-like bulk and the backbone turns within ~0.3 in p; one 32-node
+        # interpolant over the whole range converged algebraically (x_c to 3e-4), one per
+        # piece spectrally (x_c to 1e-7)
+        p_breaks=(float(np.log(4.0)), float(np.log(16.0))), m_pieces=(16, 24, 16)),
 }
 """The tabulated laws and their shape coordinates."""
-_TABLES: dict[str, dict[str, np.ndarray]] = {}
 _EXACT: dict[tuple[str, int], object] = {}
 
 
-def _law(name):
-    import importlib
+# the modules holding each table's LAW, by ShapeTable.law
+_LAW_MODULES = {"jkr": jkr, "dmt": dmt, "greenwood_williamson": gw}
 
-    return importlib.import_module(f"models.{TABLES[name].law}").LAW
+
+def _law(name):
+    return _LAW_MODULES[TABLES[name].law].LAW
 
 
 def exact_backbone(name: str, x: ArrayLike, s: ArrayLike, nodes: int = 48) -> jnp.ndarray:
@@ -123,7 +141,7 @@ def exact_backbone(name: str, x: ArrayLike, s: ArrayLike, nodes: int = 48) -> jn
 
 def spec(name: str) -> surrogate.BackboneSpec:
     """The surrogate specification of law ``name`` (p = ln s)."""
-    from .generic import backbone_orbit, contact_loss_turning_point, lindstedt_coefficient
+    from .generic import contact_loss_onset, lindstedt_coefficient
 
     tab = TABLES[name]
 
@@ -131,10 +149,7 @@ def spec(name: str) -> surrogate.BackboneSpec:
     @jax.vmap
     def kink(p):
         law, kw = _law(name), tab.reference_kw(jnp.exp(p))
-        d0 = law.overlap(**kw)
-        qc = contact_loss_turning_point(law, delta0=d0, **kw)
-        om, a1, _ = backbone_orbit(law, qc * (1.0 - 1e-12), delta0=d0, **kw)
-        return a1, om - 1.0
+        return contact_loss_onset(law, delta0=law.overlap(**kw), **kw)
 
     @jax.jit
     @jax.vmap
@@ -156,7 +171,8 @@ def spec(name: str) -> surrogate.BackboneSpec:
         p_lo=tab.p_lo, p_hi=tab.p_hi, exact=exact,
         kink=lambda p: tuple(np.asarray(v) for v in kink(jnp.asarray(p))),
         lindstedt=lambda p: np.asarray(lindstedt(jnp.asarray(p))),
-        x_max=X_MAX, m_cheb=tab.m_cheb, n_knots=_N_KNOTS)
+        x_max=X_MAX, m_cheb=tab.m_cheb, n_knots=_N_KNOTS, p_breaks=tab.p_breaks,
+        m_pieces=tab.m_pieces)
 
 
 def build_table(names: tuple[str, ...] = tuple(TABLES)) -> dict[str, np.ndarray]:
@@ -169,25 +185,6 @@ def build_table(names: tuple[str, ...] = tuple(TABLES)) -> dict[str, np.ndarray]
         for k, v in surrogate.build(spec(name)).items():
             out[f"{name}.{k}"] = v
     return out
-
-
-def load_table(name: str) -> dict[str, np.ndarray]:
-    """The stored table of law ``name`` (numpy arrays, loaded once)."""
-    if not _TABLES:
-        with np.load(TABLE_PATH) as f:
-            for key in f.files:
-                law, k = key.split(".", 1)
-                _TABLES.setdefault(law, {})[k] = f[key]
-    return _TABLES[name]
-
-
-def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
-    """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
-    law's overlap) and shape parameter s; x clipped to [0, X_MAX], ln s to the table's
-    range (values held at the ends: :data:`TABLES`). Differentiable, NaN-free."""
-    tab = TABLES[name]
-    p = jnp.clip(jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300)), tab.p_lo, tab.p_hi)
-    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p)
 
 
 def _main(argv: list[str] | None = None) -> int:

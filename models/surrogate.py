@@ -3,8 +3,9 @@
 A law whose dimensionless backbone Delta f/f0 = S(x; p) depends on one shape parameter p
 (the power law's n; the JKR and DMT load ratio F0/Fc, as log F0/Fc) gets a table built
 here from its exact backbone, fast enough for NUTS (about 0.2 us per point with gradient).
-The power-law table of :mod:`models.backbone_table` and the adhesive tables of
-:mod:`models.adhesive_backbone` are built and evaluated by this one tool.
+The power-law table of :mod:`models.backbone_table` and the tables of
+:mod:`models.shape_tables` (JKR, DMT, Greenwood-Williamson) are built and evaluated by this
+one tool.
 
 Structure (measured on the power law, see models.backbone_table): contact loss starts at
 the first-harmonic amplitude x_c(p), where S is C1 but not C2. The x axis is split there,
@@ -16,6 +17,14 @@ tensor product with a degree-23 Chebyshev interpolant in p on the 24 Chebyshev-G
 nodes of [p_lo, p_hi]; x_c(p) is a Chebyshev interpolant on the same nodes. The contact
 spline is not-a-knot; the flight spline is clamped at v = 0 to the contact spline's slope
 there, so the surrogate is C1 across x_c like the exact backbone.
+
+Pieces in p. A law whose backbone varies steeply in one stretch of its p range (the
+Greenwood-Williamson sphere where the load passes from the summits' Gaussian tail to the
+Hertz-like bulk, D0 = delta0/sigma ~ -1) sets ``p_breaks``: each piece [p_k, p_k+1] gets
+its own Chebyshev interpolant (``m_pieces`` nodes, zero-padded to the largest), stored with
+a leading piece axis and the edges as ``p_edges``. The surrogate is then continuous in p
+only to its stated error (a jump of that size at a break; gradients stay finite). Without
+breaks the table is the single interpolant above, unchanged.
 """
 
 from __future__ import annotations
@@ -51,6 +60,8 @@ class BackboneSpec:
     x_max: float = 2.0
     m_cheb: int = 24
     n_knots: int = 64
+    p_breaks: tuple[float, ...] = ()
+    m_pieces: tuple[int, ...] = ()
 
 
 def chebyshev_nodes(spec: BackboneSpec) -> tuple[np.ndarray, np.ndarray]:
@@ -84,8 +95,14 @@ def spline_coefficients(knots: np.ndarray, data: np.ndarray,
     return CubicSpline(knots, data, axis=0, bc_type=bc).c
 
 
+_CHEB_KEYS = ("xc_cheb", "coef_contact", "coef_flight")
+
+
 def build(spec: BackboneSpec) -> dict[str, np.ndarray]:
-    """Evaluate the exact backbone on the grid and fit the splines (deterministic)."""
+    """Evaluate the exact backbone on the grid and fit the splines (deterministic); with
+    ``p_breaks``, one interpolant per piece (module doc)."""
+    if spec.p_breaks:
+        return _build_pieces(spec)
     nu, p = chebyshev_nodes(spec)
     uk, vk = _knots(spec.n_knots)
     xc, sc = (np.asarray(a, float) for a in spec.kink(p))
@@ -121,6 +138,38 @@ def build(spec: BackboneSpec) -> dict[str, np.ndarray]:
     }
 
 
+def _build_pieces(spec: BackboneSpec) -> dict[str, np.ndarray]:
+    from dataclasses import replace
+
+    edges = np.array([spec.p_lo, *spec.p_breaks, spec.p_hi], float)
+    if np.any(np.diff(edges) <= 0):
+        raise ValueError(f"p_breaks {spec.p_breaks} not increasing inside [p_lo, p_hi]")
+    ms = spec.m_pieces or (spec.m_cheb,) * (edges.size - 1)
+    if len(ms) != edges.size - 1:
+        raise ValueError(f"m_pieces {ms}: one node count per piece ({edges.size - 1})")
+    parts = [build(replace(spec, p_lo=float(a), p_hi=float(b), m_cheb=int(m), p_breaks=(),
+                           m_pieces=())) for a, b, m in zip(edges[:-1], edges[1:], ms)]
+    m_max = max(ms)
+    pad = lambda a: np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, m_max - a.shape[-1])])
+    out = {k: np.concatenate([d[k] for d in parts], axis=-1)
+           for k in ("n_nodes", "xc_nodes", "q_contact", "s_flight", "kink_slope")}
+    out.update({k: np.stack([pad(d[k]) for d in parts]) for k in _CHEB_KEYS})
+    out.update({"u_knots": parts[0]["u_knots"], "v_knots": parts[0]["v_knots"],
+                "x_max": np.asarray(spec.x_max), "p_range": edges[[0, -1]], "p_edges": edges})
+    return out
+
+
+def _piece(table, p):
+    """(piece index or None, local nu in [-1, 1], Chebyshev coefficient arrays)."""
+    if "p_edges" not in table:
+        p_lo, p_hi = (float(v) for v in table["p_range"])
+        return None, (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo), table["xc_cheb"]
+    edges = jnp.asarray(table["p_edges"])
+    k = jnp.clip(jnp.searchsorted(edges[1:-1], p, side="right"), 0, edges.size - 2)
+    lo, hi = edges[k], edges[k + 1]
+    return k, (2.0 * p - (lo + hi)) / (hi - lo), jnp.asarray(table["xc_cheb"])[k]
+
+
 def chebyshev_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
     """T_0..T_{m-1}(nu) by the three-term recurrence (smooth at nu = +-1, unlike arccos)."""
     t = [jnp.ones_like(nu), nu]
@@ -129,22 +178,30 @@ def chebyshev_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
     return jnp.stack(t[:m], axis=-1)
 
 
-def _spline_eval(knots, coef, z, basis, frac):
+def _spline_eval(knots, coef, z, basis, frac, piece=None):
     # basis (m,) when p is one scalar (the sampler's case): the Chebyshev sum is taken once
     # per knot before the per-point gather, ~100x cheaper under vmap than (4, points, m)
     i, d = knot_cell(knots, z, frac)
-    if basis.ndim == 1:
-        c = (jnp.asarray(coef) @ basis)[:, i]
+    coef = jnp.asarray(coef)
+    if piece is not None and basis.ndim == 1:
+        c = (coef[piece] @ basis)[:, i]
+    elif piece is not None:
+        c = jnp.einsum("...km,...m->k...", coef[piece, :, i, :], basis)
+    elif basis.ndim == 1:
+        c = (coef @ basis)[:, i]
     else:
-        c = jnp.einsum("k...m,...m->k...", jnp.asarray(coef)[:, i, :], basis)
+        c = jnp.einsum("k...m,...m->k...", coef[:, i, :], basis)
     return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
 
 
 def kink_amplitude(table: dict[str, np.ndarray], p: jnp.ndarray, p_lo: float,
                    p_hi: float) -> jnp.ndarray:
-    """x_c(p) from its Chebyshev interpolant."""
-    nu = (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo)
-    return chebyshev_basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
+    """x_c(p) from its Chebyshev interpolant (p_lo, p_hi: the range of an unpieced table)."""
+    if "p_edges" not in table:
+        nu = (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo)
+        return chebyshev_basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
+    _, nu, xc_cheb = _piece(table, jnp.asarray(p, float))
+    return jnp.sum(chebyshev_basis(nu, xc_cheb.shape[-1]) * xc_cheb, axis=-1)
 
 
 def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
@@ -157,18 +214,19 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
         x, p = jnp.broadcast_arrays(x, p)
     xs = jnp.clip(x, 0.0, x_max)
     ps = jnp.clip(p, p_lo, p_hi)
-    nu = (2.0 * ps - (p_lo + p_hi)) / (p_hi - p_lo)
-    basis = chebyshev_basis(nu, table["n_nodes"].size)
-    xc = basis @ jnp.asarray(table["xc_cheb"])
+    piece, nu, xc_cheb = _piece(table, ps)
+    basis = chebyshev_basis(nu, jnp.shape(xc_cheb)[-1])
+    xc = (basis @ jnp.asarray(xc_cheb) if piece is None
+          else jnp.sum(basis * jnp.asarray(xc_cheb), axis=-1))
     last = table["u_knots"].size - 1
     u = xs / xc
     v = (xs - xc) / (x_max - xc)
     fu = last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0)))
     fv = last * jnp.sqrt(jnp.clip(v, 0.0, 1.0))
-    q = _spline_eval(table["u_knots"], table["coef_contact"], u, basis, fu)
+    q = _spline_eval(table["u_knots"], table["coef_contact"], u, basis, fu, piece)
     pre = 1.0 if prefactor is None else prefactor(ps)
     contact = pre * xs**2 * q
-    flight = _spline_eval(table["v_knots"], table["coef_flight"], v, basis, fv)
+    flight = _spline_eval(table["v_knots"], table["coef_flight"], v, basis, fv, piece)
     return jnp.where(xs <= xc, contact, flight)
 
 

@@ -35,6 +35,21 @@ def test_good_run_passes():
     assert v.ess_bulk_min > 1000 and v.bfmi_min > 0.3
 
 
+def test_constant_elements_raise_no_warning():
+    """A deterministic with constant elements (up-sweep predictions at x = 0) is masked
+    out of the gate, and arviz's 0/0 on it is not reported as a warning."""
+    import warnings
+
+    idata = make_idata()
+    mu = idata.posterior["mu"].values
+    pred = np.stack([mu, np.zeros_like(mu)], axis=-1)
+    idata.posterior["pred"] = (("chain", "draw", "pred_dim_0"), pred)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v = check(idata)
+    assert v.passed and np.isfinite(v.rhat_max)
+
+
 def test_bad_mixing_fails_loudly_and_is_marked():
     idata = make_idata(shift=1.0)
     with pytest.warns(RuntimeWarning, match="FAILED"):

@@ -262,3 +262,27 @@ def test_table_rebuild_is_reproducible():
     table = gw.build_table()
     stored = gw.load_table()
     np.testing.assert_array_equal(table["y_knots"], stored["y_knots"])
+
+
+def test_in_the_default_comparison_with_finite_backbone_gradients_over_the_prior():
+    """The law is compared by default (its table is within its stated error, see
+    tests/test_shape_tables.py); d shift / d(E, sigma factor, x) is finite from factor 0.05
+    to 40 (D0' from ~80 down past the table's piece break at D0' = 4) and at x through
+    contact loss to beyond the table's x = 2."""
+    from models import greenwood_williamson as gwm
+
+    law = gwm.LAW
+    assert law.in_default_comparison
+    scene = {"radius": R, "young": 200e9, "poisson": 0.27, "load": F0, "mass": 0.01613,
+             "gravity": 9.81, "roughness_rms": 25e-9}
+    x = jnp.array([0.0, 0.3, 0.9, 1.2, 2.5])
+
+    def total(young, factor):
+        kw = law.resolve(scene, {"young": young, "roughness_factor": factor})
+        return jnp.sum(law.shift(x, rung="backbone", delta0=law.overlap(**kw), **kw))
+
+    grad = jax.jit(jax.grad(total, argnums=(0, 1)))
+    for young in (150e9, 250e9):
+        for factor in (0.05, 0.3, 1.0, 3.0, 8.0, 40.0):
+            g = grad(young, factor)
+            assert all(bool(jnp.isfinite(v)) for v in g), (young, factor, g)

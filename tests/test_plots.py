@@ -481,3 +481,30 @@ def test_loo_pit_needs_its_groups():
 def test_frc_rejects_mismatched_labels():
     with pytest.raises(ValueError, match="labels"):
         plots.fig_frc(np.linspace(1, 2, 3), [np.ones(3)], ["a", "b"])
+
+
+def test_save_figure_solves_the_layout_once(tmp_path, monkeypatch):
+    """PNG and PDF share one constrained-layout solve (each savefig would solve it again,
+    most of the cost of the many-panel figures), and the frozen layout is the solved one."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    calls = []
+    execute = ConstrainedLayoutEngine.execute
+    monkeypatch.setattr(ConstrainedLayoutEngine, "execute",
+                        lambda self, fig: calls.append(1) or execute(self, fig))
+    fig, axes = plt.subplots(2, 2, layout="constrained")
+    for ax in axes.flat:
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("a long label [N]")
+    fig.draw_without_rendering()
+    solved = [ax.get_position().bounds for ax in axes.flat]
+    calls.clear()
+    fig2, axes2 = plt.subplots(2, 2, layout="constrained")
+    for ax in axes2.flat:
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("a long label [N]")
+    _check_written(plots.save_figure(fig2, tmp_path / "f"), tmp_path / "f")
+    assert len(calls) == 1
+    np.testing.assert_allclose([ax.get_position().bounds for ax in axes2.flat], solved,
+                               atol=1e-9)
+    plt.close(fig)

@@ -129,12 +129,16 @@ def test_scene_command_json_paper_numbers(capsys):
     assert q["mass_kg"] == pytest.approx(4 / 3 * math.pi * PAPER_R**3 * PAPER_RHO)
     lo, hi = q["per_young"]
     assert (lo["young_Pa"], hi["young_Pa"]) == (190e9, 210e9)
-    assert round(lo["hertz"]["delta0_m"] * 1e9) == 55 and round(hi["hertz"]["delta0_m"] * 1e9) == 52
-    assert 2.55e3 < lo["hertz"]["f0_Hz"] < hi["hertz"]["f0_Hz"] < 2.75e3
-    assert lo["jkr"]["f0_Hz"] > lo["hertz"]["f0_Hz"]
+    hz_lo, hz_hi = lo["laws"]["hertz"], hi["laws"]["hertz"]
+    assert round(hz_lo["delta0_m"] * 1e9) == 55 and round(hz_hi["delta0_m"] * 1e9) == 52
+    assert 2.55e3 < hz_lo["f0_Hz"] < hz_hi["f0_Hz"] < 2.75e3
+    assert lo["laws"]["jkr"]["f0_Hz"] > hz_lo["f0_Hz"]
     # A = 1.23e-5 s (190 GPa) and 1.12e-5 s (210 GPa): the paper's 1.1e-5 is the 210 GPa end
-    assert hi["viscoelastic"]["A_s"] == pytest.approx(1.1e-5, rel=0.03)
-    assert round(lo["viscoelastic"]["Q_hertz"]) == 5
+    assert hi["damping"]["A_s"] == pytest.approx(1.1e-5, rel=0.03)
+    # the viscoelastic law's linear Q at the scene's eta = 1.05e6 Pa s: the paper's Q ~ 5
+    assert round(lo["laws"]["viscoelastic"]["Q"]) == 5
+    assert lo["laws"]["viscoelastic"]["sources"]["eta"] == "scene (viscosity)"
+    assert "Q" not in hz_lo  # no loss channel, no Q
     assert lo["adhesion"]["law"] == "JKR"
     # rod: bar velocity sqrt(E/rho); the PC branch equals it to 1e-4 at f0
     assert lo["rod"]["bar_velocity_m_s"] == pytest.approx(math.sqrt(190e9 / 7700))
@@ -142,6 +146,52 @@ def test_scene_command_json_paper_numbers(capsys):
         pytest.approx(lo["rod"]["bar_velocity_m_s"], rel=1e-4)
     assert all(k.endswith(("_m", "_Hz", "_N_m", "_N", "_Pa", "_kg", "_s", "_m_s", "_m_s2"))
                or k in {"scene", "description", "per_young", "source"} for k in q)
+
+
+def test_scene_command_covers_every_registered_law_at_nominal_values(capsys):
+    """One block per registered law, a law registered at run time included; Hertz and the
+    power law against their closed forms (Johnson 1985, Eq. 4.23: delta0 = (3 F0 / (4 E*
+    sqrt R))^(2/3); F = C delta^n: K0 = n F0/delta0), with --param for the exponent."""
+    import dataclasses
+
+    from models import hertz
+    from models.registry import law_names, register, unregister
+
+    copy = dataclasses.replace(hertz.LAW, name="hertz_copy_scene_test", label="Hertz copy",
+                               static_overlap=None, overlap_from_frequency=None)
+    register(copy)
+    try:
+        rc, out = _run_cli(["scene", "--json", "--param", "n=2.5"], capsys)
+    finally:
+        unregister(copy.name)
+    assert rc == 0
+    q = json.loads(out)
+    lo = q["per_young"][0]
+    assert set(lo["laws"]) == set(law_names()) | {copy.name}
+    e_star = lo["e_star_Pa"]
+    f0_load, m = q["load_N"], q["mass_kg"]
+    d0 = (3 * f0_load / (4 * e_star * math.sqrt(q["radius_m"]))) ** (2 / 3)
+    for name in ("hertz", copy.name):  # the copy's overlap is the generic root solve
+        b = lo["laws"][name]
+        assert b["delta0_m"] == pytest.approx(d0, rel=1e-9)
+        assert b["K0_N_m"] == pytest.approx(1.5 * f0_load / d0, rel=1e-9)
+        assert b["f0_Hz"] == pytest.approx(math.sqrt(1.5 * f0_load / d0 / m) / (2 * math.pi),
+                                           rel=1e-9)
+        assert b["sources"] == {"young": "scene (young)"}
+    pl = lo["laws"]["powerlaw"]
+    assert pl["params"]["n"] == 2.5 and pl["sources"]["n"] == "given"
+    assert pl["sources"]["delta0_ref_log"] == "prior median"
+    assert pl["delta0_m"] == pytest.approx(math.exp(pl["params"]["delta0_ref_log"]), rel=1e-9)
+    assert pl["K0_N_m"] == pytest.approx(2.5 * f0_load / pl["delta0_m"], rel=1e-9)
+
+
+def test_scene_command_refuses_unknown_or_absurd_parameters(capsys):
+    from workflows.cli import UserError
+
+    with pytest.raises(UserError, match="no registered law has such a parameter"):
+        _run_cli(["scene", "--param", "nope=1"], capsys)
+    with pytest.raises(UserError, match="power-law exponent"):
+        _run_cli(["scene", "--param", "n=4"], capsys)
 
 
 def test_scene_command_text_and_error(tmp_path, capsys):

@@ -135,3 +135,17 @@ def test_tension_on_synthetic_paper_like_data():
     assert t["ppc"]["missed"] in ("shift", "q")
     for p in t["ppc"]["detail"].values():
         assert 0.0 <= p["p_value"] <= 1.0 and np.isfinite(p["rms_std_residual"])
+
+
+def test_analyse_tension_reads_the_laws_loss_parameter_by_name():
+    """A law whose loss parameter is not called eta (models.law.ContactLaw.tension_param):
+    the same draws under other names give the same block, keys unchanged."""
+    shared, split, rng = _fits(2)
+    eta_q, eta_shift = 10.0 ** rng.normal(4.8, 0.05, 800), 10.0 ** rng.normal(6.0, 0.05, 800)
+    renamed_shared = shared.rename_vars({"eta": "zeta"}, groups="posterior")
+    renamed_split = split.rename_vars({"eta_shift": "zeta_shift", "eta_q": "zeta_q"},
+                                      groups="posterior")
+    kw = {"rung": "paper_eq25", "eta_q": eta_q, "eta_shift": eta_shift}
+    want = analyse_tension(shared=shared, split=split, **kw)
+    got = analyse_tension(shared=renamed_shared, split=renamed_split, param="zeta", **kw)
+    assert got == want and got["p_shift_gt_q"] == 1.0

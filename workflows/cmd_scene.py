@@ -1,6 +1,8 @@
 """``beadrod scene``: every derived quantity of a scene, per Young's modulus of its range.
 
-Default: the paper's setup (E = 190 and 210 GPa). JSON keys carry their SI unit.
+Default: the paper's setup (E = 190 and 210 GPa). JSON keys carry their SI unit. The
+contact laws are the registry's (models.registry), each at its nominal parameters
+(models.nominal); the forces, damping, adhesion-map and rod blocks are the scene's own.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ import json
 import math
 from pathlib import Path
 
-__all__ = ["register", "scene_quantities", "resolve_scene"]
+__all__ = ["register", "scene_quantities", "resolve_scene", "check_given"]
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -18,19 +20,21 @@ def register(subparsers) -> argparse.ArgumentParser:
         "scene",
         help="print every derived quantity of a scene (default: the paper's setup)",
         description="Derived quantities of a bead-rod scene for each Young's modulus of its "
-        "range (the paper: E = 190 and 210 GPa): mass, weight, E*, static overlap, "
-        "stiffness and linear resonance per contact law (Hertz, JKR, DMT, power law), "
-        "viscous A and Q, adhesion map (Muller mu, Tabor lambda, regime), pull-off and "
-        "plastic-limit forces, dynamic force, and rod wave velocities.",
+        "range (the paper: E = 190 and 210 GPa): mass, weight, E*; for every registered "
+        "contact law at its nominal parameters (the scene's value, else the prior median) "
+        "the static overlap, stiffness, linear resonance and, for a law with losses, its "
+        "linear Q; viscous damping constant A, adhesion map (Muller mu, Tabor lambda, "
+        "regime), plastic-limit and dynamic forces, and rod wave velocities.",
     )
     p.add_argument("scene", nargs="?", type=Path, default=None,
                    help="scene TOML file (see models/scenes/paper.toml for the layout)")
     p.add_argument("--builtin", metavar="NAME", default=None,
                    help="a built-in scene instead of a file (paper, strong_drive, "
                    "large_soft_bead, micro_bead)")
-    p.add_argument("--n", dest="exponents", type=float, nargs="+", default=[2.0],
-                   metavar="N", help="power-law exponents to report, with the Hertz "
-                   "static overlap as delta0 (default: 2, the soft-shell law)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="a law parameter by the name `beadrod laws` gives, e.g. --param n=2.5, "
+                   "for every law that has it (repeatable); a parameter not given takes the "
+                   "scene's value where it has one, else its prior median")
     p.add_argument("--json", action="store_true", help="machine-readable output (SI keys)")
     p.set_defaults(func=run)
     return p
@@ -52,35 +56,48 @@ def _f(x) -> float:
     return float(x)
 
 
-def _per_young(scene, exponents) -> dict:
-    from models import adhesion, dmt, hertz, jkr, powerlaw, rod, viscoelastic
+def _law_blocks(scene, given: dict[str, float]) -> dict:
+    """Every registered law at its nominal parameters (models.nominal: given, else the
+    scene's value, else the prior median; ``sources`` says which): static overlap, tangent
+    stiffness and linear resonance under the load, and the linear Q where the law has a
+    loss channel."""
+    from models.nominal import linear_state
+    from models.registry import laws
+
+    from .cmd_shift import nominal_theta, scene_keywords
+
+    sc = scene_keywords(scene)
+    out: dict = {}
+    for law in laws():
+        theta, sources = nominal_theta(law, sc, {k: v for k, v in given.items()
+                                                 if k in law.param_names})
+        st = linear_state(law, sc, theta)
+        block = {"label": law.label, "params": theta, "sources": sources,
+                 "delta0_m": st["delta0_m"], "K0_N_m": st["K0_N_m"], "f0_Hz": st["f0_Hz"]}
+        if st["Q"] is not None:
+            block["Q"] = st["Q"]
+        out[law.name] = block
+    return out
+
+
+def _per_young(scene, given: dict[str, float]) -> dict:
+    # the elastic sphere (Hertz) is the reference state of the non-law quantities (forces,
+    # rod, damping), as in the paper's Sec. 4
+    from models import adhesion, hertz, rod, viscoelastic
 
     m, load, es, r = scene.mass, scene.load, scene.e_star, scene.radius
     gamma = scene.surface_energy
-    out: dict = {"young_Pa": scene.bead_material.young, "e_star_Pa": es}
+    out: dict = {"young_Pa": scene.bead_material.young, "e_star_Pa": es,
+                 "laws": _law_blocks(scene, given)}
     d0 = _f(hertz.static_overlap(load, e_star=es, radius=r))
-    k0 = _f(hertz.linear_stiffness(load, e_star=es, radius=r))
     f0 = _f(hertz.linear_frequency(load, m, e_star=es, radius=r))
-    out["hertz"] = {"delta0_m": d0, "K0_N_m": k0, "f0_Hz": f0}
-    for name, mod in (("jkr", jkr), ("dmt", dmt)):
-        kw = {"e_star": es, "radius": r, "gamma": gamma}
-        out[name] = {"delta0_m": _f(mod.static_overlap(load, **kw)),
-                     "K0_N_m": _f(mod.linear_stiffness(load, **kw)),
-                     "f0_Hz": _f(mod.linear_frequency(load, m, **kw)),
-                     "pull_off_force_N": _f(mod.pull_off_force(gamma=gamma, radius=r))}
-    out["powerlaw"] = [
-        {"n": n, "delta0_m": d0, "K0_N_m": _f(powerlaw.linear_stiffness(load, d0, n)),
-         "f0_Hz": _f(powerlaw.linear_frequency(load, m, d0, n)),
-         "hurst": _f(powerlaw.hurst_from_exponent(n))}
-        for n in exponents]
     omega0 = 2 * math.pi * f0
     if scene.viscosity is not None:
         soft = min((scene.bead_material, scene.rod_material), key=lambda mt: mt.young)
         a = _f(viscoelastic.damping_constant(eta1=scene.viscosity, young=soft.young,
                                              poisson=soft.poisson))
-        out["viscoelastic"] = {
+        out["damping"] = {
             "eta_Pa_s": scene.viscosity, "A_s": a,
-            "Q_hertz": _f(viscoelastic.linear_q(damping_constant=a, omega0=omega0)),
             "gamma_n_kg_m-1/2_s-1": _f(viscoelastic.kuwabara_kono_gamma(
                 e_star=es, radius=r, damping_constant=a)),
             "k_n_N_m-3/2": _f(hertz.stiffness_constant(e_star=es, radius=r)),
@@ -132,8 +149,25 @@ def _speeds(mat):
     return wave_speeds(mat.young, mat.poisson, mat.density)
 
 
-def scene_quantities(scene, exponents=(2.0,)) -> dict:
-    """All derived quantities of ``scene``, one block per Young's modulus (JSON-ready)."""
+def check_given(given: dict[str, float]) -> dict[str, float]:
+    """``given`` if every key is a parameter of some registered law, each value inside its
+    domain (workflows.cmd_shift.check_param); ValueError otherwise."""
+    from models.registry import laws
+
+    from .cmd_shift import check_param
+
+    known = {p for law in laws() for p in law.param_names}
+    unknown = sorted(set(given) - known)
+    if unknown:
+        raise ValueError(f"--param {', '.join(unknown)}: no registered law has such a "
+                         f"parameter; the laws' parameters: {sorted(known)}")
+    return {k: check_param(k, v) for k, v in given.items()}
+
+
+def scene_quantities(scene, given: dict[str, float] | None = None) -> dict:
+    """All derived quantities of ``scene``, one block per Young's modulus (JSON-ready);
+    ``given``: law parameters set by hand (:func:`check_given`), for every law that has
+    them."""
     import jax
 
     with jax.enable_x64(True):
@@ -142,7 +176,7 @@ def scene_quantities(scene, exponents=(2.0,)) -> dict:
             "mass_kg": scene.mass, "weight_N": scene.weight, "load_N": scene.load,
             "radius_m": scene.radius, "gravity_m_s2": scene.gravity,
             "drive_displacement_max_m": scene.drive_displacement_max,
-            "per_young": [_per_young(scene.with_young(e), list(exponents))
+            "per_young": [_per_young(scene.with_young(e), check_given(dict(given or {})))
                           for e in scene.young_values()],
         }
 
@@ -159,14 +193,17 @@ def _text(q: dict) -> str:
         lines.append(f"  {k:<34} {_fmt(q[k])}")
     for block in q["per_young"]:
         lines.append(f"E = {block['young_Pa'] / 1e9:g} GPa   (E* = {block['e_star_Pa']:.6g} Pa)")
-        for sec in ("hertz", "jkr", "dmt", "viscoelastic", "adhesion", "forces", "rod"):
+        for name, law in block["laws"].items():
+            lines.append(f"  [{name}] {law['label']}")
+            lines += [f"    {k:<42} {_fmt(v)} ({law['sources'][k]})"
+                      for k, v in law["params"].items()]
+            lines += [f"    {k:<42} {_fmt(v)}" for k, v in law.items()
+                      if k not in ("label", "params", "sources")]
+        for sec in ("damping", "adhesion", "forces", "rod"):
             if sec not in block:
                 continue
             lines.append(f"  [{sec}]")
             lines += [f"    {k:<42} {_fmt(v)}" for k, v in block[sec].items()]
-        for pl in block["powerlaw"]:
-            lines.append(f"  [powerlaw n = {pl['n']:g}]")
-            lines += [f"    {k:<42} {_fmt(v)}" for k, v in pl.items() if k != "n"]
     return "\n".join(lines)
 
 
@@ -184,11 +221,13 @@ def run(args: argparse.Namespace) -> int:
     from models.scenes import SceneError
     from workflows.cli import UserError
 
+    from .cmd_shift import parse_params
+
     try:
         scene, source = resolve_scene(args.scene, args.builtin)
+        q = scene_quantities(scene, parse_params(args.param))
     except (SceneError, ValueError) as exc:
         raise UserError(str(exc)) from None
-    q = scene_quantities(scene, args.exponents)
     q["source"] = source
     if args.json:
         print(json.dumps(_json_safe(q), indent=2))

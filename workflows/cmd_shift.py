@@ -25,19 +25,20 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from models.rungs import FIT_RUNGS
+from models.rungs import RUNGS
 
 from . import lawfiles
 
 __all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
-           "METHODS", "PARAM_DOMAINS"]
+           "METHODS", "PARAM_DOMAINS", "scene_keywords", "nominal_theta", "parse_params"]
 
 X_MAX = 2.0
 """Largest x = delta_a/delta0 computed (models.backbone_table.X_MAX: the tables end there)."""
 
-# --method takes the rungs a law computes its shift at (models.rungs.FIT_RUNGS), spelled
+# --method takes every rung (models.rungs.RUNGS, spelled as everywhere else); a law
+# computes those it lists in its ``rungs`` (check_method)
 # as everywhere else
-METHODS = FIT_RUNGS
+METHODS = tuple(RUNGS)
 
 # law parameter -> (what it is, unit, (low, high, low excluded) or the models.scenes.BOUNDS
 # key that gives the physical range)
@@ -104,14 +105,17 @@ def check_method(law: Any, method: str) -> str:
     """The law's rung for ``method``; ValueError if the law has no such rung."""
     from models.rungs import check_rung
 
-    rung = check_rung(method, fit=True)
+    rung = check_rung(method)
     if rung not in law.rungs:
         raise ValueError(f"law '{law.name}' has no {method} rung; its rungs: "
                          f"{', '.join(law.rungs)}")
     return rung
 
 
-def _scene_keywords(scene: Any) -> dict[str, float]:
+def scene_keywords(scene: Any) -> dict[str, float]:
+    """The scene quantities a law's nominal parameters may come from, by name
+    (inference.likelihood.scene_quantities, plus ``viscosity`` [Pa s] where the scene
+    gives one)."""
     from inference.likelihood import scene_quantities
 
     out = scene_quantities(scene)
@@ -120,21 +124,14 @@ def _scene_keywords(scene: Any) -> dict[str, float]:
     return out
 
 
-def _theta(law: Any, sc: dict[str, float], given: dict[str, float]
-           ) -> tuple[dict[str, float], dict[str, str]]:
-    """The law's parameters and where each comes from: given, else the scene's value
-    (its ``scene_key``), else the prior median."""
-    from models.law import prior_median
+def nominal_theta(law: Any, sc: dict[str, float], given: dict[str, float] | None = None
+                  ) -> tuple[dict[str, float], dict[str, str]]:
+    """The law's parameters and where each comes from (models.nominal.nominal_parameters:
+    given, else the scene's value, else the prior median), each checked by
+    :func:`check_param`."""
+    from models.nominal import nominal_parameters
 
-    theta, source = {}, {}
-    for p in law.params:
-        if p.name in given:
-            theta[p.name], source[p.name] = given[p.name], "given"
-        elif (p.scene_key or p.name) in sc:  # its scene quantity, or one of its own name
-            key = p.scene_key or p.name
-            theta[p.name], source[p.name] = sc[key], f"scene ({key})"
-        else:
-            theta[p.name], source[p.name] = prior_median(p.prior), "prior median"
+    theta, source = nominal_parameters(law, sc, given)
     return {k: check_param(k, v) for k, v in theta.items()}, source
 
 
@@ -166,6 +163,7 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     import numpy as np
 
     from models.law import SCENE_KEYS
+    from models.nominal import linear_state
     from models.registry import get_law
     from models.scenes import builtin_scene, load_scene
 
@@ -191,16 +189,16 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
         raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
                          f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
     rung = check_method(contact, method)
-    sc = _scene_keywords(scene)
+    sc = scene_keywords(scene)
     sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
-    theta, sources = _theta(contact, sc, {k: v for k, v in given.items()
-                                          if k in contact.param_names})
-    kw = contact.resolve(sc, theta)
-    d0 = contact.overlap(**kw)
-    k0 = float(jax_stiffness(contact, d0, kw))
-    kw["omega0"] = float(np.sqrt(k0 / kw["mass"]))
-    values = np.asarray(contact.shift(np.asarray(xs, float), rung=rung, delta0=d0, **kw),
-                        float)
+    theta, sources = nominal_theta(contact, sc, {k: v for k, v in given.items()
+                                                 if k in contact.param_names})
+    state = linear_state(contact, sc, theta)
+    kw, d0 = state["kw"], state["delta0_m"]
+    try:
+        values = np.asarray(contact.shift(np.asarray(xs, float), rung=rung, **kw), float)
+    except RuntimeError as exc:  # a forced-response solve that did not converge
+        raise ValueError(f"law '{law}' ({rung}): {exc}") from None
     bad = [xv for xv, v in zip(xs, np.atleast_1d(values)) if not np.isfinite(v)]
     if bad:  # a defect, not an input error: say where instead of printing NaN
         raise ValueError(f"law '{law}' ({rung}) gives no finite shift at x = "
@@ -208,17 +206,10 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     out = {"law": law, "method": rung, "rung": rung, "scene": scene.name, "x": xs,
            "delta_f_over_f0": [float(v) for v in np.atleast_1d(values)],
            "params": {k: float(v) for k, v in theta.items()}, "sources": sources,
-           "delta0_m": float(d0), "f0_Hz": kw["omega0"] / (2 * np.pi)}
+           "delta0_m": float(d0), "f0_Hz": state["f0_Hz"]}
     if "n" in theta:
         out["n"] = theta["n"]
     return out
-
-
-def jax_stiffness(law: Any, delta0: Any, kw: dict) -> float:
-    """K0 = F'(delta0) [N/m] by autodiff (models.generic.stiffness)."""
-    from models.generic import stiffness
-
-    return float(stiffness(law, delta0, **kw))
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -247,8 +238,9 @@ def register(sub) -> None:
     # no models import here: building the parser must not start JAX
     p = sub.add_parser("shift", help="predicted resonance shift Delta f/f0 of a contact law",
                        description="Delta f/f0 at normalised amplitudes x = delta_a/delta0 "
-                       "(0 <= x <= 2) for one contact law, by the paper's first-order average "
-                       "or the exact conservative backbone. x > 1 means the contact opens "
+                       "(0 <= x <= 2) for one contact law, at any rung the law has (--method: "
+                       "series, first order, exact backbone, harmonic balance, time "
+                       "integration, the paper's formulas). x > 1 means the contact opens "
                        "during the cycle (Hertz).")
     p.add_argument("--law", required=True,
                    help="contact law, e.g. hertz, powerlaw, viscoelastic, jkr, dmt (a wrong "
@@ -257,8 +249,11 @@ def register(sub) -> None:
                    help=f"amplitudes delta_a/delta0, each in [0, {X_MAX:g}]")
     p.add_argument("--n", type=float, help="power-law exponent, 1 < n <= 3 (law powerlaw)")
     p.add_argument("--method", default="first_order", choices=list(METHODS),
-                   help="the rung: first_order (the paper's averaged stiffness), backbone "
-                   "(exact) or paper_eq25 (the paper's formulas) (default: %(default)s)")
+                   help="the rung: series (small-amplitude x^2 term), first_order (the "
+                   "paper's averaged stiffness), backbone (exact, conservative), "
+                   "harmonic_balance or time_integration (the forced, damped resonance peak "
+                   "at Q = the law's linear Q, else 50; seconds per point), or paper_eq25 "
+                   "(the paper's formulas), as far as the law has it (default: %(default)s)")
     p.add_argument("--param", action="append", metavar="KEY=VALUE",
                    help="a law parameter or scene quantity by the name `beadrod laws` gives, "
                    "e.g. --param gamma=0.5 (repeatable); a law parameter not given takes the "

@@ -17,46 +17,90 @@ import numpy as np
 from . import figure_data, plots, styles
 from .plots_data import Curve
 
-__all__ = ["make_figures", "theory_curves", "fitted_specs"]
+__all__ = ["make_figures", "theory_curves", "figure_laws", "fitted_specs", "exponent_law",
+           "f0_ranges"]
 
 log = logging.getLogger("beadrod")
 
-_FO, _BB, _EQ25 = (styles.RUNG_LINESTYLES[k] for k in ("first_order", "backbone", "paper_eq25"))
+_BB = styles.RUNG_LINESTYLES["backbone"]
 
 
-def theory_curves(scene: Any, x: np.ndarray) -> dict[str, Curve]:
-    """Delta f/f0 versus x = delta_a/delta0 for each law at the scene's nominal values
-    (the paper's Fig. 4, plus the exact backbone): label -> :class:`Curve`."""
-    import jax.numpy as jnp
+_RUNG_WORDS = {"first_order": "first order", "backbone": "exact backbone",
+               "paper_eq25": "paper Eq. 25"}
 
-    from models import hertz, jkr, shift, viscoelastic
-    from models.backbone_table import backbone_shift_clipped
 
-    xj = jnp.asarray(x)
-    curves = {
-        "Hertz, first order (nominal)": Curve(np.asarray(shift.first_order_hertz(xj)),
-                                              "hertz", _FO, width=1.2),
-        # the tabulated exact backbone (<= 1e-6 from the quadrature, which costs ~20 s
-        # to compile here); the fits use the same table
-        "Hertz, exact backbone (nominal)": Curve(
-            np.asarray(backbone_shift_clipped(xj, hertz.EXPONENT)), "hertz", _BB, width=1.2),
-    }
-    e_star, radius, load, mass = (float(scene.e_star), float(scene.radius), float(scene.load),
-                                  float(scene.mass))
-    if scene.surface_energy:
-        kw = {"e_star": e_star, "radius": radius, "gamma": float(scene.surface_energy)}
-        curves["JKR, first order (nominal)"] = Curve(
-            np.asarray(jkr.shift_first_order(xj, load=load, **kw)), "jkr", _FO, width=1.2)
-    if scene.viscosity:
-        young, nu = scene.bead_material.young, scene.bead_material.poisson
-        a = viscoelastic.damping_constant(eta1=scene.viscosity, eta2=scene.viscosity,
-                                          young=young, poisson=nu)
-        omega0 = 2 * np.pi * float(hertz.linear_frequency(load, mass, e_star=e_star,
-                                                           radius=radius))
-        curves[f"viscoelastic, paper Eq. 25 (eta = {scene.viscosity / 1e6:.3g} MPa s)"] = Curve(
-            np.asarray(viscoelastic.shift_paper_eq25(xj, damping_constant=a, omega=omega0)),
-            "viscoelastic", _EQ25, width=1.2)
-    return curves
+def figure_laws(names: Any = ()) -> list[Any]:
+    """The laws a figure draws at their nominal parameters: every law of the default
+    comparison plus the registered laws among ``names`` (the fitted ones), in registry
+    order."""
+    from models.registry import laws
+
+    names = set(names)
+    return [law for law in laws() if law.in_default_comparison or law.name in names]
+
+
+def _nominal_state(law: Any, sc: dict[str, float]) -> dict[str, Any] | None:
+    """The law's linear state at its nominal parameters (models.nominal), None (and a
+    warning) where it cannot be computed, so that one law does not cost every figure."""
+    from models.nominal import linear_state, nominal_parameters
+
+    try:
+        return linear_state(law, sc, nominal_parameters(law, sc)[0])
+    except Exception as exc:  # noqa: BLE001 (a law file's law may fail anywhere)
+        log.warning("figures: no nominal state of %s (%s: %s); its curves are left out",
+                    law.name, type(exc).__name__, exc)
+        return None
+
+
+def _merge(curves: list[tuple[str, str, Curve]]) -> dict[str, Curve]:
+    """One entry per distinct curve: laws whose nominal curves of one rung coincide
+    (Hertz and the viscoelastic laws share their conservative backbone) share one label,
+    'A, rung (nominal)' over '= B, C', coloured as the first."""
+    groups: list[tuple[list[str], str, Curve]] = []
+    for law_label, rung_words, c in curves:
+        for labels, words, first in groups:
+            if words == rung_words and np.allclose(c.y, first.y, rtol=1e-9, atol=1e-12):
+                labels.append(law_label)
+                break
+        else:
+            groups.append(([law_label], rung_words, c))
+    return {f"{labels[0]}, {words} (nominal)"
+            + (f"\n= {', '.join(labels[1:])}" if len(labels) > 1 else ""): c
+            for labels, words, c in groups}
+
+
+def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curve]:
+    """Delta f/f0 versus x = delta_a/delta0 of each law of ``laws`` (default:
+    :func:`figure_laws`) at its nominal parameters (models.nominal: the scene's value,
+    else the prior median), at first order and on the exact backbone, and on the paper's
+    Eq. 25 where that differs from first order (the paper's Fig. 4, plus the exact
+    backbone): label -> :class:`Curve`. Only rungs with a fast path (the law's
+    ``shifts``) are drawn: the generic quadrature takes minutes per curve."""
+    from .cmd_shift import scene_keywords
+
+    sc = scene_keywords(scene)
+    xs = np.asarray(x, float)
+    rows: list[tuple[str, str, Curve]] = []
+    for law in figure_laws() if laws is None else laws:
+        state = _nominal_state(law, sc)
+        if state is None:
+            continue
+        ys: dict[str, np.ndarray] = {}
+        for rung in ("first_order", "backbone", "paper_eq25"):
+            if rung not in law.rungs:
+                continue
+            if rung not in law.shifts:  # the generic quadrature costs minutes per law
+                log.info("figures: %s has no fast path at rung %s; its nominal curve there "
+                         "is left out", law.name, rung)
+                continue
+            y = np.asarray(law.shift(xs, rung=rung, **state["kw"]), float)
+            if rung == "paper_eq25" and "first_order" in ys and np.allclose(
+                    y, ys["first_order"], rtol=1e-9, atol=1e-12):
+                continue  # the paper's formula is this law's first order: drawn already
+            ys[rung] = y
+            rows.append((law.label, _RUNG_WORDS[rung],
+                         Curve(y, law.name, styles.RUNG_LINESTYLES[rung], width=1.2)))
+    return _merge(rows)
 
 
 def fitted_specs(runs: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
@@ -116,12 +160,25 @@ def _shift_figures(save, runs, specs, inputs, ds, pref: str | None) -> None:
          "floor as grey dashes.", "fit")
 
 
+def exponent_law(names: Any = ()) -> Any:
+    """The law whose force exponent the max_shift_vs_n figure (paper Fig. 5) is drawn
+    against: the law with a parameter named ``n``, a fitted one (among ``names``) first;
+    None if no registered law has one."""
+    from models.registry import laws
+
+    names = set(names)
+    with_n = [law for law in laws() if "n" in law.param_names]
+    fitted = [law for law in with_n if law.name in names]
+    return (fitted or with_n or [None])[0]
+
+
 def _theory_figures(save, runs, specs, inputs, scene) -> None:
     from models import shift
     from models.backbone_table import backbone_shift_fast
 
     x_grid = np.linspace(1e-3, 1.3, 200)
-    curves = theory_curves(scene, x_grid)
+    fitted_laws = {getattr(spec, "law", None) for spec in specs.values()}
+    curves = theory_curves(scene, x_grid, figure_laws(fitted_laws))
     for name, run in runs.items():
         if name not in specs:
             continue
@@ -132,44 +189,68 @@ def _theory_figures(save, runs, specs, inputs, scene) -> None:
         curves[f"{_label(run)}: fit{rung} (median, 90 %)"] = Curve(
             q50, name, _BB, band=(q05, q95), width=2.0)
     save(plots.fig_shift_curves(x_grid, curves), "theory_shift",
-         "Delta f/f0 versus delta_a/delta0: thin lines, each law at the scene's nominal "
-         "parameters (paper Fig. 4; dashed: the paper's first order, solid: the exact "
-         "backbone, dotted: the paper's Eq. 25); thick lines, each fitted law's posterior "
-         "median with its 90 % band. Curves that coincide are drawn in alternating "
-         "dashes.", "theory")
+         "Delta f/f0 versus delta_a/delta0: thin lines, each law at its nominal parameters "
+         "(the scene's value, else its prior median; paper Fig. 4; dashed: the paper's "
+         "first order, solid: the exact backbone, dotted: the paper's Eq. 25 where it "
+         "differs from first order; a rung without a fast path is left out); laws whose "
+         "curves coincide share one label. Thick "
+         "lines, each fitted law's posterior median with its 90 % band. Curves that "
+         "coincide are drawn in alternating dashes.", "theory")
+    law = exponent_law(fitted_laws)
+    if law is None:
+        return
     n = np.linspace(1.01, 3.0, 120)
     fitted = None
-    if "powerlaw" in runs:
-        fitted = figure_data.posterior_interval(runs["powerlaw"].idata, "n")
+    if law.name in runs:
+        fitted = figure_data.posterior_interval(runs[law.name].idata, "n")
     save(plots.fig_max_shift_vs_n(n, np.asarray(shift.first_order_powerlaw(1.0, n)),
                                   np.asarray(backbone_shift_fast(np.ones_like(n), n)),
-                                  fitted=fitted),
+                                  fitted=fitted, model=law.name),
          "max_shift_vs_n", "Delta f/f0 at delta_a = delta0 versus the power-law exponent n: "
          "the paper's first order (dashed; paper Fig. 5), which hardens for n > 2, and the "
          "exact backbone (solid), which softens for every n > 1"
-         + (", with the power-law fit's n (median and 90 % interval)." if fitted else "."),
+         + (f", with the {law.label} fit's n (median and 90 % interval)." if fitted else "."),
          "theory")
 
 
-def _data_figures(save, ds) -> None:
-    from models import jkr
-    from models.hertz import linear_frequency as hertz_f0
-    from models.materials import effective_modulus
+def f0_ranges(scene: Any, laws: Any = None) -> dict[str, tuple[float, float]]:
+    """Linear resonance f0 [Hz] of each law of ``laws`` (default :func:`figure_laws`) at
+    its nominal parameters, at both ends of the scene's Young's modulus range: label ->
+    (lo, hi); laws with equal ranges share one label ('A' over '= B'). A law whose
+    nominal f0 does not depend on E gets no range."""
+    from .cmd_shift import scene_keywords
 
+    sc = scene_keywords(scene)
+    ends = scene.young_range or (scene.bead_material.young, scene.bead_material.young)
+    groups: list[tuple[list[str], tuple[float, float]]] = []
+    for law in figure_laws() if laws is None else laws:
+        states = [_nominal_state(law, {**sc, "young": float(e)}) for e in ends]
+        if any(st is None for st in states):
+            continue
+        vals = [st["f0_Hz"] for st in states]
+        rng = (min(vals), max(vals))
+        if len(ends) > 1 and ends[0] != ends[1] and rng[0] == rng[1]:
+            # its nominal f0 does not depend on E (a law parametrised by its overlap): a
+            # band of zero width would only clutter the legend
+            log.info("figures: the nominal f0 of %s does not depend on E; no range drawn",
+                     law.name)
+            continue
+        for labels, other in groups:
+            if np.allclose(rng, other, rtol=1e-9):
+                labels.append(law.label)
+                break
+        else:
+            groups.append(([law.label], rng))
+    return {"\n= ".join(labels): rng for labels, rng in groups}
+
+
+def _data_figures(save, ds, names: Any = ()) -> None:
     scene = ds.scene
-    lo_hi = scene.young_range or (scene.bead_material.young, scene.bead_material.young)
-    nu = scene.bead_material.poisson
-    ranges = {}
-    for label, fn in (("Hertz", lambda es: hertz_f0(scene.load, scene.mass, e_star=es,
-                                                    radius=scene.radius)),
-                      ("JKR adhesion", lambda es: jkr.linear_frequency(
-                          scene.load, scene.mass, e_star=es, radius=scene.radius,
-                          gamma=scene.surface_energy or 0.7))):
-        vals = [float(fn(effective_modulus(e, nu))) for e in lo_hi]
-        ranges[label] = (min(vals), max(vals))
+    ranges = f0_ranges(scene, figure_laws(names))
     save(plots.fig_f0_ranges(ds.f0, ranges, protocol_ids=list(ds.protocol_ids)), "f0_ranges",
-         "Measured linear resonance of each protocol against the Hertz and JKR ranges for "
-         "the scene's Young's modulus range (paper Fig. 6).", "data")
+         "Measured linear resonance of each protocol against each law's range at its "
+         "nominal parameters (the scene's value, else its prior median) for the scene's "
+         "Young's modulus range (paper Fig. 6).", "data")
     save(plots.fig_q_vs_f0(ds.f0, ds.q_ref), "q_vs_f0",
          "Reference Q versus linear resonance per protocol (paper Fig. 8).", "data")
     save(plots.fig_inv_q_shift(ds.normalized_amplitude("weight"), ds.drive_inv_q_shift,
@@ -261,7 +342,7 @@ def make_figures(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, result: 
 
     specs = fitted_specs(runs, result.get("config", {}))
     _theory_figures(save, runs, specs, inputs, ds.scene)
-    _data_figures(save, ds)
+    _data_figures(save, ds, {getattr(spec, "law", None) for spec in specs.values()})
     _shift_figures(save, runs, specs, inputs, ds, result.get("preferred"))
     _tension_figures(save, result, out)
     _evidence_figure(save, result)

@@ -62,25 +62,38 @@ def data_block(ds: Any) -> dict[str, Any]:
             "synthetic": truth is not None, "truth": world_truth(truth)}
 
 
-def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str = "eta"):
-    """Draws of ``name`` from one viscoelastic NUTS fit (ModelSpec keywords ``spec_kw``)."""
+def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str | None = None):
+    """Draws of ``name`` (default: the law's ``tension_param``) from one NUTS fit of the
+    tension's shared law (ModelSpec keywords ``spec_kw``, the law among them)."""
     from inference.numpyro_models import ModelSpec, build_model
     from inference.sample import run_nuts
+    from models.registry import get_law
 
     s = cfg["sampling"]
-    fit = run_nuts(build_model(ModelSpec(law="viscoelastic", **spec_kw)), inputs,
+    spec = ModelSpec(**spec_kw)
+    fit = run_nuts(build_model(spec), inputs,
                    num_warmup=s["warmup"], num_samples=s["samples"], num_chains=s["chains"],
                    seed=cfg["seed"] + seed_offset, target_accept=s["target_accept"],
                    predictive=False)
-    return np.asarray(fit.idata.posterior[name]).ravel()
+    return np.asarray(fit.idata.posterior[name or get_law(spec.law).tension_param]).ravel()
 
 
-def _prior_eta(n: int, seed: int) -> np.ndarray:
+def _prior_draws(param: str, n: int, seed: int) -> np.ndarray:
     import jax
 
     from inference.priors import prior
 
-    return np.asarray(prior("eta", {}).sample(jax.random.PRNGKey(seed), (n,)))
+    return np.asarray(prior(param, {}).sample(jax.random.PRNGKey(seed), (n,)))
+
+
+def _pair(pair: tuple[str, str] | None) -> tuple[str, str]:
+    """The tension's (shared, split) law names: ``pair``, else the registry's."""
+    from models.registry import tension_pair
+
+    found = pair or tension_pair()
+    if found is None:
+        raise ValueError("no registered pair of laws with tension roles 'shared' and 'split'")
+    return found
 
 
 def _paper_cfg(cfg: dict[str, Any]) -> dict[str, Any]:
@@ -88,26 +101,29 @@ def _paper_cfg(cfg: dict[str, Any]) -> dict[str, Any]:
     return {**cfg, "evidence": {**cfg["evidence"], "methods": ["bridge"]}}
 
 
-def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str) -> list:
+def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
+                 pair: tuple[str, str] | None = None) -> list:
     """The extra fits the tension needs, as workflows.parallel jobs (keys 'tension:...'):
-    eta from Q alone; under a rung where eta enters the shift, eta from the shift alone;
-    otherwise (and if cfg asks for it) the paper's Eq. 25 shared/split pair and its
-    shift-alone fit."""
+    the loss parameter from Q alone; under a rung where it enters the shift, from the
+    shift alone; otherwise (and if cfg asks for it) the paper's Eq. 25 shared/split pair
+    and its shift-alone fit. ``pair``: the (shared, split) law names
+    (models.registry.tension_pair when None)."""
     from inference.numpyro_models import ModelSpec
     from inference.tension import ETA_IN_SHIFT
 
     from .parallel import Job
 
+    shared, split = _pair(pair)
     jobs = [Job("tension:eta_q", "eta", "eta_q",
-                {"rung": rung, "likelihood": lik, "use_shift": False}, cfg, seed_offset=12)]
-    shift_alone = {"likelihood": lik, "use_q": False}
+                {"law": shared, "rung": rung, "likelihood": lik, "use_shift": False}, cfg,
+                seed_offset=12)]
+    shift_alone = {"law": shared, "likelihood": lik, "use_q": False}
     if rung in ETA_IN_SHIFT:
         jobs.append(Job(f"tension:eta_shift:{rung}", "eta", "eta_shift",
                         {"rung": rung, **shift_alone}, cfg, seed_offset=11))
     elif cfg["tension"].get("paper_rung", True):
-        for name, mode in (("viscoelastic", "shared"), ("viscoelastic_split", "split")):
-            spec = ModelSpec(law="viscoelastic", eta_mode=mode, rung="paper_eq25",
-                             likelihood=lik)
+        for name in (shared, split):
+            spec = ModelSpec(law=name, rung="paper_eq25", likelihood=lik)
             jobs.append(Job(f"tension:{name}", "fit", f"{name}_paper_eq25", spec,
                             _paper_cfg(cfg), str(out / "tension")))
         jobs.append(Job("tension:eta_shift:paper_eq25", "eta", "eta_shift",
@@ -117,7 +133,7 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str) -> list:
 
 def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str, Any],
             out: Path, done: dict[str, Any] | None = None,
-            runner: Any = None) -> dict[str, Any]:
+            runner: Any = None, pair: tuple[str, str] | None = None) -> dict[str, Any]:
     """The Q-versus-shift tension under the comparison's rung and under the paper's Eq. 25.
 
     The statistics are :func:`inference.tension.analyse_tension`'s (eta from the shift
@@ -126,36 +142,40 @@ def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str
     order, backbone: the correct physics) there is no shift-alone eta. The Q-alone fit
     does not depend on the rung and is shared by both blocks. ``done`` holds
     the results of :func:`tension_jobs` already run (workflows.parallel); what is missing
-    is run here by ``runner`` (workflows.comparison.JOBS). Returns the block of the
+    is run here by ``runner`` (workflows.comparison.JOBS). ``pair``: the (shared, split)
+    law names (models.registry.tension_pair when None). Returns the block of the
     comparison's rung with the paper block under 'paper' (if run).
     """
     from .parallel import run_jobs
 
+    pair = _pair(pair)
     lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
-    rung = runs["viscoelastic"].summary["rung"]
+    rung = runs[pair[0]].summary["rung"]
     done = dict(done or {})
-    todo = [j for j in tension_jobs(cfg, out, rung, lik) if j.key not in done]
+    todo = [j for j in tension_jobs(cfg, out, rung, lik, pair) if j.key not in done]
     if todo:
         log.info("tension: %s", ", ".join(j.key.removeprefix("tension:") for j in todo))
         done.update(run_jobs(todo, runner=runner, workers=1, ds=ds, inputs=inputs,
                              resume=False, n_devices=1))
     eta_q = done["tension:eta_q"]
-    block = _tension_block(runs, inputs, cfg, rung, eta_q,
+    block = _tension_block(runs, pair, inputs, cfg, rung, eta_q,
                            done.get(f"tension:eta_shift:{rung}"), out)
-    if "tension:viscoelastic" in done:
-        paper_runs = {k: done[f"tension:{k}"] for k in ("viscoelastic", "viscoelastic_split")}
-        block["paper"] = _tension_block(paper_runs, inputs, cfg, "paper_eq25", eta_q,
+    if f"tension:{pair[0]}" in done:
+        paper_runs = {k: done[f"tension:{k}"] for k in pair}
+        block["paper"] = _tension_block(paper_runs, pair, inputs, cfg, "paper_eq25", eta_q,
                                         done["tension:eta_shift:paper_eq25"], out)
     return block
 
 
-def _tension_block(runs, inputs, cfg, rung: str, eta_q, eta_shift,
+def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, eta_shift,
                    out: Path) -> dict[str, Any]:
     from inference.tension import ETA_IN_SHIFT, analyse_tension
+    from models.registry import get_law
 
     from .report_tension import tension_sentences
 
-    shared, split = runs["viscoelastic"], runs["viscoelastic_split"]
+    shared, split = (runs[k] for k in pair)
+    param = get_law(pair[0]).tension_param
 
     def log_z(run):
         s = run.summary
@@ -165,21 +185,21 @@ def _tension_block(runs, inputs, cfg, rung: str, eta_q, eta_shift,
     block = analyse_tension(rung=rung, eta_q=eta_q, shared=shared.idata, split=split.idata,
                             eta_shift=eta_shift if in_shift else None,
                             log_z_shared=log_z(shared), log_z_split=log_z(split),
-                            seed=cfg["seed"])
+                            seed=cfg["seed"], param=param)
     block["log_bf_method"] = shared.summary.get("log_z_method")
     block["paragraph"] = tension_sentences(block)  # the report's two sentences
-    block["fits_ok"] = {k: runs[k].summary["status"] == "ok"
-                        for k in ("viscoelastic", "viscoelastic_split")}
+    block["fits_ok"] = {k: runs[k].summary["status"] == "ok" for k in pair}
     block["q_scale"] = None
     if "q_pred" in shared.idata.posterior and inputs.get("q_obs") is not None:
         # in natural units: the joint fit's linear Q against the measured reference Q
         block["q_scale"] = {
             "q_pred_median": float(np.median(np.asarray(shared.idata.posterior["q_pred"]))),
             "q_obs_median": float(np.median(np.asarray(inputs["q_obs"])))}
-    eta_joint = np.asarray(shared.idata.posterior["eta"]).ravel()
+    eta_joint = np.asarray(shared.idata.posterior[param]).ravel()
     # the eta figure draws the shift-alone posterior; where eta does not enter the shift
     # that posterior is the prior, drawn here for the figure only (no statistic uses it)
-    shift_draws = eta_shift if in_shift else _prior_eta(eta_joint.size, cfg["seed"] + 11)
+    shift_draws = eta_shift if in_shift else _prior_draws(param, eta_joint.size,
+                                                          cfg["seed"] + 11)
     np.savez(out / "idata" / f"tension_eta_samples_{rung}.npz", shift=shift_draws, q=eta_q,
              joint=eta_joint)
     return block

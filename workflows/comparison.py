@@ -61,7 +61,7 @@ _DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
 
 class _Jobs:
     """The job runner of compare, fit and rungs (workflows.parallel.JobRunner): "fit"
-    (pipeline.fit_law), "eta" (the eta draws of one extra viscoelastic NUTS fit,
+    (pipeline.fit_law), "eta" (the eta draws of one extra NUTS fit of the tension's law,
     compare_outputs.nuts_eta) and "ns" (nested-sampling evidence of a spec)."""
 
     def run(self, job: Job, resume: bool, ds: Any, inputs: dict[str, Any]) -> Any:
@@ -121,8 +121,10 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
 
     The fits (and the tension's extra fits) run in ``cfg['workers']`` processes side by
     side (workflows.parallel; 1 = in this process); the numbers do not depend on it.
-    The tension needs both viscoelastic laws and Q in the likelihood (likelihood.use_q)."""
+    The tension needs both laws of the registry's tension pair (models.registry.tension_pair:
+    the viscoelastic ones) and Q in the likelihood (likelihood.use_q)."""
     from inference.likelihood import model_inputs
+    from models.registry import tension_pair
 
     from . import compare_outputs
 
@@ -133,13 +135,13 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     specs = model_specs(cfg, names)
     lik = next(iter(specs.values())).likelihood
     jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
-    pair = {"viscoelastic", "viscoelastic_split"} <= set(specs)
-    do_tension = cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"]
+    pair = tension_pair(specs)  # (shared, split) law names, if both are compared
+    do_tension = bool(cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"])
     if cfg["tension"]["enabled"] and pair and not do_tension:
         log.info("tension analysis skipped: it sets eta from Q against eta from the shift, "
                  "and likelihood.use_q = false leaves Q out")
     if do_tension:
-        jobs += compare_outputs.tension_jobs(cfg, out, specs["viscoelastic"].rung, lik)
+        jobs += compare_outputs.tension_jobs(cfg, out, specs[pair[0]].rung, lik, pair)
     jobs.sort(key=job_order)
     workers = resolve_workers(cfg["workers"], len(jobs))
     figures = bool(cfg["report"]["figures"])
@@ -158,7 +160,8 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
         if do_tension:
             t0 = time.perf_counter()
             begin(log, "tension", "tension analysis")
-            tension = compare_outputs.tension(runs, inputs, ds, cfg, out, finished, JOBS)
+            tension = compare_outputs.tension(runs, inputs, ds, cfg, out, finished, JOBS,
+                                              pair)
             timings["tension_s"] = time.perf_counter() - t0
             done(log, "tension", "tension analysis done (%.0f s)", timings["tension_s"])
         laws = [r.summary for r in runs.values()]

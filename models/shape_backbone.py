@@ -1,0 +1,59 @@
+"""Fast backbones of the one-shape-parameter laws (JKR, DMT, Greenwood-Williamson), read
+from their stored tables.
+
+The evaluation half of :mod:`models.shape_tables`: the laws' backbone rungs call
+:func:`backbone_fast`, and :mod:`models.shape_tables` builds the tables from the laws'
+forces (it imports the laws), so the dependency runs one way, law -> this module <-
+builder. Nothing here needs a law object: each table carries its own shape range
+(``p_range``, p = ln s) and amplitude range (``x_max``), written by
+:func:`models.surrogate.build` from the builder's :data:`models.shape_tables.TABLES`.
+
+Shape parameters s (what each law passes): JKR r = F0/Fc, Fc = 3 pi gamma R; DMT
+r = F0/Fc, Fc = 4 pi gamma R; Greenwood-Williamson D0' = delta0'/sigma (overlap counted
+from the contact edge -6 sigma). Outside a table's range the value is held at its end.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import jax.numpy as jnp
+import numpy as np
+from jax.typing import ArrayLike
+
+from . import surrogate
+
+__all__ = ["X_MAX", "TABLE_PATH", "backbone_fast", "load_table", "shape_range"]
+
+X_MAX = 2.0
+"""Largest tabulated amplitude x = delta_a/delta0 [-]; beyond it the value is held."""
+TABLE_PATH = pathlib.Path(__file__).with_name("data") / "shape_tables.npz"
+
+_TABLES: dict[str, dict[str, np.ndarray]] = {}
+
+
+def load_table(name: str) -> dict[str, np.ndarray]:
+    """The stored table of law ``name`` (numpy arrays, loaded once; keys 'NAME.*' in the
+    file)."""
+    if not _TABLES:
+        with np.load(TABLE_PATH) as f:
+            for key in f.files:
+                law, k = key.split(".", 1)
+                _TABLES.setdefault(law, {})[k] = f[key]
+    return _TABLES[name]
+
+
+def shape_range(name: str) -> tuple[float, float]:
+    """(p_lo, p_hi) of law ``name``'s table, p = ln s [-]: the range it was built on."""
+    lo, hi = load_table(name)["p_range"]
+    return float(lo), float(hi)
+
+
+def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
+    """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
+    law's overlap) and shape parameter s; x clipped to [0, X_MAX], ln s to the table's
+    range (values held at the ends: :data:`models.shape_tables.TABLES`). Differentiable,
+    NaN-free."""
+    p_lo, p_hi = shape_range(name)
+    p = jnp.clip(jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300)), p_lo, p_hi)
+    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p)

@@ -1,0 +1,44 @@
+"""The evaluation half of the shape tables (models.shape_backbone): each stored table's own
+ranges agree with the builder's TABLES (else the file is stale), values are held beyond
+them, and the laws' backbone rungs read exactly these tables."""
+
+import numpy as np
+import pytest
+
+from models import registry, shape_backbone, shape_tables
+
+X = np.array([0.05, 0.4, 0.85, 1.1, 1.6, 2.0])
+
+
+@pytest.mark.parametrize("name", sorted(shape_tables.TABLES))
+def test_stored_ranges_are_the_builders(name):
+    tab = shape_tables.TABLES[name]
+    assert shape_backbone.shape_range(name) == (tab.p_lo, tab.p_hi)
+    assert float(shape_backbone.load_table(name)["x_max"]) == shape_backbone.X_MAX
+
+
+@pytest.mark.parametrize("name", sorted(shape_tables.TABLES))
+def test_values_are_held_beyond_the_ranges(name):
+    p_lo, p_hi = shape_backbone.shape_range(name)
+    for p_end, p_out in ((p_lo, p_lo - 2.0), (p_hi, p_hi + 3.0)):
+        end = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(p_end)))
+        out = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(p_out)))
+        np.testing.assert_array_equal(out, end)
+    at_max = np.asarray(shape_backbone.backbone_fast(name, 2.0, np.exp(p_hi)))
+    beyond = np.asarray(shape_backbone.backbone_fast(name, 3.5, np.exp(p_hi)))
+    assert beyond == at_max
+    # inside the range the shape parameter matters (the table is not flat)
+    mid = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(0.5 * (p_lo + p_hi))))
+    assert np.max(np.abs(mid - end)) > 1e-4
+
+
+def test_laws_backbone_rungs_read_these_tables():
+    """JKR's backbone rung at load ratio r = F0/Fc equals the table at r (Fc = 3 pi gamma R):
+    the law module evaluates through shape_backbone, which the builder re-exports."""
+    assert shape_tables.backbone_fast is shape_backbone.backbone_fast
+    law = registry.get_law("jkr")
+    kw = {"load": 0.158, "radius": 7.938e-3, "e_star": 1.1e11, "mass": 0.016, "gamma": 0.7}
+    r = kw["load"] / (3.0 * np.pi * kw["gamma"] * kw["radius"])
+    got = law.shift(X, rung="backbone", delta0=law.overlap(**kw), **kw)
+    np.testing.assert_allclose(got, shape_backbone.backbone_fast("jkr", X, r), rtol=0,
+                               atol=1e-14)
