@@ -245,7 +245,7 @@ def _law(split: bool):
 
     return ContactLaw(
         name="viscoelastic_split" if split else "viscoelastic",
-        label="viscoelastic (split eta)" if split else "viscoelastic",
+        label="viscoelastic (split η)" if split else "viscoelastic",
         color="#009E73" if not split else "#56B4E9",
         reference="Brilliantov et al. 1996; Kuwabara & Kono 1987; paper Eqs. 8-9, 25, 30",
         description=("Hertz + Kuwabara-Kono damping; " + (

@@ -165,7 +165,7 @@ def test_styles_give_every_model_its_own_colour_never_black():
     for n in names:
         assert styles.color(styles.label(n)) == styles.color(n), n
     assert styles.color("Hertz, exact backbone (nominal)") == styles.color("hertz")
-    assert styles.color("viscoelastic (split eta): fit") == styles.color("viscoelastic_split")
+    assert styles.color("viscoelastic (split η): fit") == styles.color("viscoelastic_split")
 
 
 def test_styles_prefer_the_registry_colour_and_label():

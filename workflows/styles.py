@@ -196,7 +196,7 @@ def resolve(name_or_label: str) -> str:
     for lab, n in known:
         if low == lab:
             return n
-    for lab, n in known:  # "viscoelastic (split eta): fit" names viscoelastic_split
+    for lab, n in known:  # "viscoelastic (split η): fit" names viscoelastic_split
         if low.startswith(lab):
             return n
     key = re.sub(r"[\s\-_]", "", low)
