@@ -47,9 +47,12 @@ shift at the rung (:meth:`models.law.ContactLaw.shift`): a closed form or a tabl
 has one (Hertz, power law, viscoelastic, JKR and DMT have fast paths at every rung they
 list: 'first_order', 'backbone', and for the viscoelastic law the paper's 'paper_eq25'),
 else the generic quadrature of models.generic (exact, slow). A law without the rung is
-refused (:class:`ForwardModelUnavailable`), never swapped for another rung. Tables clip x
-to [0, 2]: beyond it (delta_a > 2 delta0, only for absurd parameters) the curve is held
-at its x = 2 value, the misfit is left to the likelihood, and no NaN reaches the sampler.
+refused (:class:`ForwardModelUnavailable`), never swapped for another rung. A fast path
+with a limited domain (a table's x <= 2 and shape range; the rough sphere's summits in
+contact: the law's ``domains``) holds its end value outside it, which is not the law's
+curve: a parameter point that puts any sweep outside gets zero likelihood (site
+``law_domain``), so no sampler and no evidence counts a held value. In effect the prior
+is truncated to the domain, and log Z counts only the mass inside it.
 
 The law-free ``baseline``: Delta f/f0 = -amp * xs^power with xs = delta_a omega0_p^2 / g
 (the overlap scale g/omega0^2 of a linear spring; any other scale is absorbed into amp),
@@ -207,8 +210,14 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
     omega0 = 2.0 * jnp.pi * f0
     if spec.use_shift:
         p = data["proto"]
-        curve = law.shift(data["amplitude"] / delta0[p], rung=spec.rung, delta0=delta0[p],
-                          omega0=omega0[p], **kw)
+        x = data["amplitude"] / delta0[p]
+        curve = law.shift(x, rung=spec.rung, delta0=delta0[p], omega0=omega0[p], **kw)
+        inside = law.in_domain(x, rung=spec.rung, delta0=delta0[p], omega0=omega0[p], **kw)
+        if inside is not None:
+            # outside its domain the fast path holds a value that is not the law's: such
+            # a point gets zero likelihood rather than a silently wrong one (the prior
+            # is in effect truncated to the domain; log Z counts only the mass inside)
+            numpyro.factor("law_domain", jnp.where(jnp.all(inside), 0.0, -jnp.inf))
         observe_drive(spec, curve, data)
     if spec.use_q:
         if law.predicts_q:

@@ -29,6 +29,10 @@ from numpyro.infer import MCMC, NUTS, Predictive, init_to_median
 from .likelihood import without_observations
 from .variables import SAMPLE_STATS, SITE_DIMS, VARIABLES
 
+# unconstrained units: a fraction of a typical posterior width, enough that the chains'
+# starts differ, far less than any basin the mode search separates
+_INIT_JITTER = 0.02
+
 __all__ = ["configure", "FitResult", "run_nuts", "idata_coords", "describe", "EXTRA_FIELDS"]
 
 # everything arviz turns into sample_stats: lp (from potential_energy), step_size,
@@ -56,6 +60,7 @@ class FitResult:
     idata: az.InferenceData
     mcmc: MCMC
     timings: dict[str, float] = field(default_factory=dict)
+    modes: Any = None  # inference.modes.ModeSearch when the chains started at a mode
 
 
 def _chain_method(num_chains: int, chain_method: str | None) -> str:
@@ -134,6 +139,7 @@ def run_nuts(
     measure_compile: bool = False,
     coords: dict[str, Sequence[Any]] | None = None,
     dims: dict[str, list[str]] | None = None,
+    init: str = "modes",
 ) -> FitResult:
     """NUTS on ``model(data)``; returns InferenceData with posterior, sample_stats,
     log_likelihood, observed_data and (``predictive``) prior and posterior predictive.
@@ -149,7 +155,14 @@ def run_nuts(
     ``coords`` overrides the coordinates of :func:`idata_coords` (pass
     ``{"protocol": dataset.protocol_ids}``; ``protocol_q`` then follows from it);
     ``dims`` adds to or overrides :data:`inference.variables.SITE_DIMS`.
+
+    ``init``: 'modes' (default) starts every chain near the deepest mode of a multi-start
+    search (:func:`inference.modes.find_modes`; its cost is 'mode_search_s', its modes
+    are ``FitResult.modes`` and the posterior's attrs 'modes_found', 'mode_gap');
+    'median' starts them at the prior median, as numpyro's init_to_median.
     """
+    if init not in ("modes", "median"):
+        raise ValueError(f"init must be 'modes' or 'median', not {init!r}")
     # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
     # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
     def make_kernel():
@@ -158,10 +171,23 @@ def run_nuts(
 
     kernel = make_kernel()
     method = _chain_method(num_chains, chain_method)
-    mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_samples,
-                num_chains=num_chains, chain_method=method, progress_bar=False)
     key = jax.random.PRNGKey(seed)
     k_run, k_prior, k_post = jax.random.split(key, 3)
+    modes, init_params, search_s = None, None, 0.0
+    if init == "modes":
+        from .modes import find_modes
+
+        tm = time.perf_counter()
+        modes = find_modes(model, data, seed=seed)
+        # a small spread between the chains' starts, so that R-hat still tests mixing
+        rng = np.random.default_rng(seed)
+        init_params = {k: v + _INIT_JITTER * rng.standard_normal((num_chains, *np.shape(v)))
+                       for k, v in modes.best.items()}
+        if num_chains == 1:
+            init_params = {k: v[0] for k, v in init_params.items()}
+        search_s = time.perf_counter() - tm
+    mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_samples,
+                num_chains=num_chains, chain_method=method, progress_bar=False)
     compile_s = float("nan")
     if measure_compile:
         # a 1+1-iteration run costs the compilation of the same loop and nothing else
@@ -174,12 +200,12 @@ def run_nuts(
             probe = MCMC(make_kernel(), num_warmup=1, num_samples=1, num_chains=num_chains,
                          chain_method=method, progress_bar=False)
             tc = time.perf_counter()
-            probe.run(k_run, data, extra_fields=EXTRA_FIELDS)
+            probe.run(k_run, data, extra_fields=EXTRA_FIELDS, init_params=init_params)
             jax.block_until_ready(probe.get_samples())
             costs.append(time.perf_counter() - tc)
         compile_s = min(costs)
     t0 = time.perf_counter()
-    mcmc.run(k_run, data, extra_fields=EXTRA_FIELDS)
+    mcmc.run(k_run, data, extra_fields=EXTRA_FIELDS, init_params=init_params)
     jax.block_until_ready(mcmc.get_samples())
     t2 = time.perf_counter()
     prior = post_pred = None
@@ -217,6 +243,8 @@ def run_nuts(
                 ds.coords[name] = coord
     describe(idata)
     timings = {"nuts_s": t2 - t0, "predictive_s": t3 - t2}
+    if modes is not None:
+        timings["mode_search_s"] = search_s
     if measure_compile:  # absent otherwise (not NaN: NaN is not JSON)
         timings.update(compile_s=compile_s, sampling_s=t2 - t0 - compile_s)
     attrs = {"seed": seed, "num_chains": num_chains, "num_warmup": num_warmup,
@@ -226,7 +254,11 @@ def run_nuts(
     spec = getattr(model, "spec", None)
     if spec is not None:
         attrs["model"] = spec.name
+    if modes is not None:
+        attrs["modes_found"] = len(modes.log_density)
+        if modes.gap is not None:
+            attrs["mode_gap"] = modes.gap
     attrs.update(extra_attrs or {})
     for k, v in attrs.items():
         idata.posterior.attrs[k] = v
-    return FitResult(idata, mcmc, timings)
+    return FitResult(idata, mcmc, timings, modes)

@@ -90,7 +90,10 @@ def attach_fast_backbone(law: ContactLaw, scene: dict) -> ContactLaw:
                                   jnp.asarray(0.5))
 
     note = "backbone tabulated on first use (shape-invariant law)"
+    # the table holds its x = 2 value beyond; the inference counts no point there
     return dataclasses.replace(law, shifts={**law.shifts, "backbone": fast},
+                               domains={**law.domains, "backbone": lambda x, **_:
+                                        surrogate.within_amplitude(x, _X_MAX)},
                                description=f"{law.description}; {note}".strip("; "))
 
 

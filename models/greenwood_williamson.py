@@ -271,6 +271,18 @@ def build_table(mu: float = MU, n_rings: int = 200) -> dict[str, np.ndarray]:
             "mu": np.asarray(mu), "summit_cutoff": np.asarray(SUMMIT_CUTOFF)}
 
 
+MIN_REDUCED_OVERLAP = 3.0
+"""Smallest D0' = delta0'/sigma [-] (overlap from the contact edge over sigma) at which
+the law is used. A Greenwood-Williamson layer is a continuous summit density, so it needs
+summits in contact: their expected number under the sphere is
+N(D0') = 2 pi R eta sigma int_{6-D0'}^{6} [Phi_c(s) - Phi_c(6)] ds, with eta sigma beta =
+0.04 and beta fixed by mu (the module doc), which makes N independent of sigma and R:
+N = 15 at D0' = 5, 1.5 at 4, 0.07 at 3, 1e-4 at 1.5 (tests/test_greenwood_williamson.py).
+Below 3 not one summit in ten would touch the bead: no contact for this law to describe
+(a fit there once rested the bead on 1e-5 summits, 54 nats above its physical mode)."""
+__all__ += ["MIN_REDUCED_OVERLAP"]
+
+
 def _main(argv: list[str] | None = None) -> int:
     return rebuild_cli(argv, prog="python -m models.greenwood_williamson",
                        description="Tabulated Greenwood-Tripp rough-sphere load-approach law.",
@@ -283,7 +295,7 @@ if __name__ == "__main__":
 
 def _law():
     from .law import YOUNG, ContactLaw, Param, Prior
-    from .shape_backbone import backbone_fast
+    from .shape_backbone import backbone_fast, in_table
 
     factor = Param(
         "roughness_factor", "-", r"$\sigma/\sigma_\mathrm{scene}$", Prior("lognormal", 1.0, 0.7),
@@ -320,13 +332,20 @@ def _law():
                      f"of rms sigma, Johnson's mu = {MU:g}); overlap counted from the "
                      "outermost summits. Backbone rung: a table in (x, ln delta0'/sigma), "
                      "three Chebyshev pieces, within 3e-5 in Delta f/f0 of the exact "
-                     "backbone (models.shape_tables; measured at most 1.1e-5)"),
+                     "backbone (models.shape_tables; measured at most 1.1e-5). Used where "
+                     f"delta0'/sigma >= {MIN_REDUCED_OVERLAP:g} (0.07 summits expected in "
+                     "contact there, 1.5 at 4); the fits count no point below"),
         params=(YOUNG, factor), force=_force, static_overlap=_overlap,
         # the protocols scatter by the elastic scale E* R^(1/2) (F/F' does not depend on it)
         overlap_from_frequency=_overlap_f0,
         in_default_comparison=True,
         shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
             "greenwood_williamson", x, delta0 / sigma(kw))},
+        # the law holds where summits carry the load (MIN_REDUCED_OVERLAP) and the table
+        # covers the point (shape_backbone.in_table); the inference counts no point outside
+        domains={"backbone": lambda x, *, delta0, **kw: in_table(
+            "greenwood_williamson", x, delta0 / sigma(kw))
+            & (delta0 / sigma(kw) >= MIN_REDUCED_OVERLAP)},
         # relative fit time (models.law.ContactLaw.cost): tabulated load-approach integral
         # and two-parameter backbone table
         cost=3.0,

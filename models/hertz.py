@@ -79,6 +79,7 @@ def _law():
     from .law import YOUNG, ContactLaw
     from .rungs import LADDER
     from .shift import first_order_hertz
+    from .surrogate import within_amplitude
 
     return ContactLaw(
         name="hertz", label="Hertz", color="#0072B2",
@@ -95,6 +96,8 @@ def _law():
         shifts={"first_order": lambda x, **_: first_order_hertz(x),
                 "paper_eq25": lambda x, **_: first_order_hertz(x),
                 "backbone": lambda x, **_: backbone_shift_clipped(x, EXPONENT)},
+        # the table holds its x = 2 value beyond; the inference counts no point there
+        domains={"backbone": lambda x, **_: within_amplitude(x)},
     )
 
 

@@ -54,7 +54,7 @@ def _law():
     from .jkr_table import X_MAX, load_ratio, shift_first_order_fast
     from .law import GAMMA, YOUNG, ContactLaw
     from .rungs import LADDER
-    from .shape_backbone import backbone_fast
+    from .shape_backbone import backbone_fast, in_table
 
     def ratio(kw):
         return load_ratio(kw["load"], gamma=kw["gamma"], radius=kw["radius"])
@@ -82,6 +82,9 @@ def _law():
         shifts={"first_order": first_order,
                 "paper_eq25": first_order,
                 "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw))},
+        # below the table's shape range, or beyond x = 2, the held value is not this
+        # law's backbone: the inference counts no point there (shape_backbone.in_table)
+        domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw))},
         # relative fit time (models.law.ContactLaw.cost): the implicit contact-radius
         # solve and the two-parameter backbone table made it the slowest on the embedded data
         cost=4.0,

@@ -137,7 +137,11 @@ class ContactLaw:
       [rad/s] among the keywords (per sweep);
     * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
     * ``contact_edge(**kw)`` -> the overlap [m] below which the surfaces separate
-      (default 0: unilateral contact; adhesive laws hold on to negative overlaps).
+      (default 0: unilateral contact; adhesive laws hold on to negative overlaps);
+    * ``domains``: rung name -> ``fn(x, **kw)`` -> bool array, True where that rung's
+      fast path is valid (a table's range). Outside it the fast path returns a held
+      value, so samplers must not count it: the inference gives the point zero
+      likelihood (:meth:`in_domain`). A rung with no entry is valid everywhere.
 
     ``rungs``: the rungs the law computes (those of :data:`models.rungs.FIT_RUNGS` are the
     ones it can be fitted at); those without a ``shifts`` entry are served by
@@ -164,6 +168,7 @@ class ContactLaw:
     overlap_from_frequency: Callable[..., Any] | None = None
     linear_q: Callable[..., Any] | None = None
     contact_edge: Callable[..., Any] | None = None
+    domains: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     color: str | None = None
     source: str = "built-in"
     description: str = ""
@@ -252,6 +257,12 @@ class ContactLaw:
             return run(self, x, **kw)
         raise RungUnavailable(f"law '{self.name}': rung {rung!r} has no generic form; "
                               "give it in the law's shifts")
+
+    def in_domain(self, x: Any, *, rung: str, **kw: Any) -> Any:
+        """Bool array: True where ``rung``'s fast path holds at x (same keywords as
+        :meth:`shift`); None where the rung has no limited domain."""
+        fn = self.domains.get(rung) if rung in self.shifts else None
+        return None if fn is None else fn(jnp.asarray(x, float), **kw)
 
     def quality_factor(self, **kw: Any) -> Any:
         """Linear Q [-] at ``omega0`` [rad/s]."""

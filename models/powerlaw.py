@@ -83,6 +83,7 @@ def _law():
     from .law import ContactLaw, Param, Prior
     from .rungs import LADDER
     from .shift import first_order_powerlaw
+    from .surrogate import within_amplitude
 
     n = Param("n", "-", r"$n$", Prior("uniform", 1.0, 3.0),
               "Load-overlap exponent, F = C delta^n. Prior Uniform(1, 3): n = (1 + H)/H for "
@@ -111,6 +112,8 @@ def _law():
         shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),
                 "paper_eq25": lambda x, *, n, **_: first_order_powerlaw(x, n),
                 "backbone": lambda x, *, n, **_: backbone_shift_clipped(x, n)},
+        # the table holds its x = 2 value beyond; the inference counts no point there
+        domains={"backbone": lambda x, **_: within_amplitude(x)},
     )
 
 

@@ -11,6 +11,9 @@ builder. Nothing here needs a law object: each table carries its own shape range
 Shape parameters s (what each law passes): JKR r = F0/Fc, Fc = 3 pi gamma R; DMT
 r = F0/Fc, Fc = 4 pi gamma R; Greenwood-Williamson D0' = delta0'/sigma (overlap counted
 from the contact edge -6 sigma). Outside a table's range the value is held at its end.
+Above p_hi that is each law's Hertz limit (adhesion or roughness below 1e-3 of the load
+or the overlap), within the table's error; below p_lo and beyond X_MAX it is not the
+law's backbone, and :func:`in_table` says so (the laws' ``domains``).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from jax.typing import ArrayLike
 
 from . import surrogate
 
-__all__ = ["X_MAX", "TABLE_PATH", "backbone_fast", "load_table", "shape_range"]
+__all__ = ["X_MAX", "TABLE_PATH", "backbone_fast", "in_table", "load_table", "shape_range"]
 
 X_MAX = 2.0
 """Largest tabulated amplitude x = delta_a/delta0 [-]; beyond it the value is held."""
@@ -57,3 +60,12 @@ def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
     p_lo, p_hi = shape_range(name)
     p = jnp.clip(jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300)), p_lo, p_hi)
     return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p)
+
+
+def in_table(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
+    """True where law ``name``'s table gives its backbone: 0 <= x <= X_MAX and
+    ln s >= p_lo (above p_hi the held value is the Hertz limit, see the module doc)."""
+    p_lo, _ = shape_range(name)
+    x = jnp.asarray(x, float)
+    p = jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300))
+    return surrogate.within_amplitude(x, X_MAX) & (p >= p_lo - 1e-12)

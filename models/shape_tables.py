@@ -15,7 +15,9 @@ and the flight acceleration F0/(K0 delta0) (:mod:`models.generic`):
 E* drops out of all three (the tests check the invariance). The tables are built by
 :mod:`models.surrogate` (the tool of the power-law table) from the generic exact backbone
 of each law's force. Outside a law's p range the value is held at the end (each entry of
-:data:`TABLES` says what that means physically); x beyond X_MAX = 2 is held too. JKR and
+:data:`TABLES` says what that means physically); x beyond X_MAX = 2 is held too. Fits
+never use a held value below p_lo or beyond X_MAX: the laws' domains
+(:func:`models.shape_backbone.in_table`) give such points zero likelihood. JKR and
 DMT contact is taken to part at delta = 0 (where the approach branch forms it; the
 snap-off hysteresis is a loss, not a stiffness). Errors against the generic exact backbone
 (tests/test_shape_tables.py): JKR and DMT within 2e-6 in Delta f/f0.

@@ -37,8 +37,8 @@ import numpy as np
 
 from ._math import knot_cell
 
-__all__ = ["BackboneSpec", "build", "evaluate", "chebyshev_nodes", "chebyshev_basis",
-           "kink_amplitude", "to_chebyshev", "spline_coefficients"]
+__all__ = ["BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
+           "chebyshev_basis", "kink_amplitude", "to_chebyshev", "spline_coefficients"]
 
 
 @dataclass(frozen=True)
@@ -202,6 +202,13 @@ def kink_amplitude(table: dict[str, np.ndarray], p: jnp.ndarray, p_lo: float,
         return chebyshev_basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
     _, nu, xc_cheb = _piece(table, jnp.asarray(p, float))
     return jnp.sum(chebyshev_basis(nu, xc_cheb.shape[-1]) * xc_cheb, axis=-1)
+
+
+def within_amplitude(x: jnp.ndarray, x_max: float = 2.0) -> jnp.ndarray:
+    """True where 0 <= x <= x_max [-], the amplitudes a backbone table covers. Beyond
+    x_max :func:`evaluate` holds the x_max value (the bead flies over more than twice its
+    overlap), which is not the backbone there: the laws' ``domains`` use this test."""
+    return (x >= 0.0) & (x <= x_max)
 
 
 def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,

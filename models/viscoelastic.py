@@ -221,6 +221,7 @@ def _law(split: bool):
     from .backbone_table import backbone_shift_clipped
     from .law import YOUNG, ContactLaw, Param, Prior
     from .rungs import LADDER
+    from .surrogate import within_amplitude
 
     def eta(name, what):
         return Param(name, "Pa s", {"eta": r"$\eta$", "eta_shift": r"$\eta_\mathrm{shift}$",
@@ -263,6 +264,8 @@ def _law(split: bool):
                 "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),
                 "paper_eq25": lambda x, *, omega0, **kw: shift_paper_eq25(
                     x, damping_constant=a(kw, e_shift), omega=omega0)},
+        # the table holds its x = 2 value beyond; the inference counts no point there
+        domains={"backbone": lambda x, **_: within_amplitude(x)},
         linear_q=lambda *, omega0, **kw: linear_q(damping_constant=a(kw, e_q), omega0=omega0),
         tension_role="split" if split else "shared",
         tension_param="eta",

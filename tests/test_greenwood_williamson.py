@@ -286,3 +286,30 @@ def test_in_the_default_comparison_with_finite_backbone_gradients_over_the_prior
         for factor in (0.05, 0.3, 1.0, 3.0, 8.0, 40.0):
             g = grad(young, factor)
             assert all(bool(jnp.isfinite(v)) for v in g), (young, factor, g)
+
+
+def test_summit_count_behind_the_law_domain():
+    # expected summits under the sphere, N = 2 pi R eta sigma int [Phi_c(s) - Phi_c(6)] ds
+    # over s in [6 - D0', 6], with eta sigma beta = 0.04 and beta = 2 R (0.32/(3 mu))^2
+    # (the module doc), by mpmath; the law's domain starts where N is 0.07
+    import mpmath as mp
+
+    from models import greenwood_williamson as gw
+
+    def count(d0e):
+        sf = lambda s: mp.erfc(s / mp.sqrt(2)) / 2  # noqa: E731
+        tail = mp.quad(lambda s: sf(s) - sf(gw.SUMMIT_CUTOFF),
+                       [gw.SUMMIT_CUTOFF - d0e, gw.SUMMIT_CUTOFF])
+        return float(2 * mp.pi * 0.04 * tail / (2 * (0.32 / (3 * gw.MU)) ** 2))
+
+    assert count(gw.MIN_REDUCED_OVERLAP) == pytest.approx(0.0675, rel=0.01)
+    assert count(4.0) == pytest.approx(1.50, rel=0.01)
+    assert count(5.0) == pytest.approx(14.7, rel=0.01)
+    law, sigma = gw.LAW, 25e-9
+    kw = {"roughness_rms": sigma, "roughness_factor": 1.0, "e_star": 1.1e11,
+          "radius": 7.938e-3, "load": 0.158}
+    x = np.array([0.1, 0.5, 1.9, 2.1])
+    inside = np.asarray(law.in_domain(x, rung="backbone", delta0=5.0 * sigma, **kw))
+    np.testing.assert_array_equal(inside, [True, True, True, False])  # x <= 2 as well
+    below = np.asarray(law.in_domain(x, rung="backbone", delta0=2.9 * sigma, **kw))
+    assert not below.any()

@@ -42,6 +42,9 @@ NUISANCE_UNITS = {
     "tau_logq": "-",
 }
 BASELINE_LABEL = "law-free baseline"
+# a second mode whose peak is this close [nat] to the sampled one's could hold a share of
+# the evidence that bridge sampling (one mode) misses: log 2 if they were equal
+MODE_GAP_WARN = 3.0
 
 
 def model_names() -> list[str]:
@@ -263,6 +266,11 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
                    data_hash=ds.data_hash, extra_attrs={"law": name},
                    coords={"protocol": list(ds.protocol_ids)})
     timings = dict(fit.timings)
+    modes = fit.modes.to_dict() if fit.modes is not None else None
+    if modes and modes["gap"] is not None and modes["gap"] < MODE_GAP_WARN:
+        log.warning("%s: a second posterior mode within %.1f nat of the one sampled: its "
+                    "mass is missing from the evidence (bridge sampling fits one mode)",
+                    name, modes["gap"])
     done(log, job, "%s: NUTS done (%.0f s)", name, time.perf_counter() - t0)
     begin(log, job, "%s: diagnostics and LOO", name)
     ess_min = min(400.0, 0.4 * s["samples"] * s["chains"])
@@ -328,7 +336,7 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         "evidence_agree": agree, "evidence": {k: e.to_dict() for k, e in estimates.items()},
         "elpd_loo": loo["elpd_loo"], "elpd_loo_se": loo["se"],
         "pareto_k_bad": loo["k_bad"] + loo["k_very_bad"], "loo": loo,
-        "timings": timings, "data_hash": ds.data_hash, "cache_key": key,
+        "timings": timings, "modes": modes, "data_hash": ds.data_hash, "cache_key": key,
     }
     save_idata(fit.idata, idata_path)
     write_json(summary_path, summary)

@@ -1,0 +1,145 @@
+"""Where NUTS starts: a multi-start search for the posterior's modes.
+
+Why. NUTS explores the basin it starts in, and bridge sampling (the default evidence)
+fits one Normal to those draws, so a run started at the prior median reports the nearest
+mode as if it were the only one. On the embedded data the rough-sphere law had a second
+mode (sigma at 6.8x the scene's roughness, its summits carrying the load below the
+table's range) 54 nats above the one the median start found; nested sampling saw it,
+bridge sampling could not.
+
+Method. ``starts`` points are drawn from the prior, mapped to numpyro's unconstrained
+space and spread about their coordinate-wise median by ``spread`` (overdispersed starts,
+Gelman & Rubin 1992, so that a basin in the prior's tail is reached); Adam then descends
+the potential (minus log joint density) from all of them at once (one compiled, vmapped
+scan). Two optima are one mode unless the log density on the straight line between them
+dips more than ``barrier`` nats below the lower one. The chains start at the deepest.
+What is reported (:class:`ModeSearch`): every distinct mode's log density at its optimum,
+so a caller can say when a second mode comes close (its mass is then missing from the
+evidence of a one-mode sampler).
+
+Cost: ``starts x steps`` gradient evaluations, vectorised; a few seconds for the
+costliest law on the 2-core machine, plus one compilation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import jax
+import jax.flatten_util
+import jax.numpy as jnp
+import numpy as np
+from numpyro.infer import Predictive
+from numpyro.infer.util import potential_energy, unconstrain_fn
+
+from .evidence import latent_site_names
+
+__all__ = ["ModeSearch", "find_modes"]
+
+_SEGMENT = 6  # interior points of the barrier test between two optima
+
+
+@dataclass(frozen=True)
+class ModeSearch:
+    """The distinct optima found, deepest first.
+
+    ``log_density``: log joint density (numpyro's -potential, unconstrained space) at each
+    optimum; ``points``: each optimum as a dict of unconstrained site values;
+    ``starts_converged``: how many starts ended at a finite density.
+    """
+
+    log_density: tuple[float, ...]
+    points: tuple[dict[str, np.ndarray], ...] = field(repr=False)
+    starts: int = 0
+    starts_converged: int = 0
+
+    @property
+    def best(self) -> dict[str, np.ndarray]:
+        return self.points[0]
+
+    @property
+    def gap(self) -> float | None:
+        """log density of the deepest mode minus the second's [nat] (None: one mode)."""
+        return None if len(self.log_density) < 2 else self.log_density[0] - self.log_density[1]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"modes": len(self.log_density), "log_density": list(self.log_density),
+                "gap": self.gap, "starts": self.starts,
+                "starts_converged": self.starts_converged}
+
+
+def _adam(grad_fn: Callable, u0: jnp.ndarray, steps: int, lr: float) -> jnp.ndarray:
+    b1, b2, eps = 0.9, 0.999, 1e-8
+
+    def step(carry, k):
+        u, m, v = carry
+        g = grad_fn(u)
+        g = jnp.where(jnp.isfinite(g), g, 0.0)  # a start outside the support: no push
+        m = b1 * m + (1 - b1) * g
+        v = b2 * v + (1 - b2) * g * g
+        # the step size decays tenfold over the run: coarse basin-finding, then settling
+        rate = lr * 0.1 ** (k / steps)
+        mh, vh = m / (1 - b1 ** (k + 1)), v / (1 - b2 ** (k + 1))
+        return (u - rate * mh / (jnp.sqrt(vh) + eps), m, v), None
+
+    z = jnp.zeros_like(u0)
+    (u, _, _), _ = jax.lax.scan(step, (u0, z, z), jnp.arange(steps, dtype=u0.dtype))
+    return u
+
+
+def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
+               steps: int = 200, lr: float = 0.05, spread: float = 2.0,
+               barrier: float = 1.0, seed: int = 0) -> ModeSearch:
+    """Multi-start search of ``model(data)``'s posterior modes (module doc).
+
+    Raises RuntimeError when no start reaches a finite log density.
+    """
+    kw = {"data": data}
+    latents = latent_site_names(model, kw)
+    draws = Predictive(model, num_samples=starts, return_sites=latents)(
+        jax.random.PRNGKey(seed), data)
+    draws = {k: draws[k] for k in latents}
+    # the unconstrained layout, from an abstract evaluation (eagerly the model is slow)
+    shapes = jax.eval_shape(lambda p: unconstrain_fn(model, (), kw, p),
+                            jax.tree_util.tree_map(lambda a: a[0], draws))
+    _, unravel = jax.flatten_util.ravel_pytree(
+        jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
+
+    def pot(x):
+        return potential_energy(model, (), kw, unravel(x))
+
+    t = jnp.linspace(0.0, 1.0, _SEGMENT + 2)[1:-1]
+
+    @jax.jit
+    def run(draws):
+        # prior draws -> unconstrained, spread about their median (in the one program)
+        u = jax.vmap(lambda p: unconstrain_fn(model, (), kw, p))(draws)
+        x0 = jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u)
+        centre = jnp.median(x0, axis=0)
+        x0 = centre + spread * (x0 - centre)
+        xs = jax.vmap(lambda x: _adam(jax.grad(pot), x, steps, lr))(x0)
+        # the highest potential on the segment between every pair of optima, in the same
+        # program (one compilation): segments of one basin stay near its floor
+        seg = xs[None, :, None, :] + t[None, None, :, None] * (xs[:, None, None, :]
+                                                               - xs[None, :, None, :])
+        ridge = jax.vmap(pot)(seg.reshape(-1, seg.shape[-1])).reshape(seg.shape[:3])
+        return xs, jax.vmap(pot)(xs), jnp.max(ridge, axis=-1)
+
+    xs, pe, ridge = (np.asarray(a) for a in run(draws))
+    ok = np.isfinite(pe)
+    if not ok.any():
+        raise RuntimeError(f"mode search: none of {starts} starts reached a finite "
+                           "log density (the prior may put no mass where the law is defined)")
+    order = np.argsort(np.where(ok, pe, np.inf))[: int(ok.sum())]
+    # Adam stops short of the optimum along flat directions, so two starts in one basin
+    # end apart: they are one mode unless the density between them dips by more than
+    # `barrier` nats below the lower end (a straight-line barrier test)
+    modes: list[int] = []
+    for i in order:
+        if not any(ridge[i, j] <= pe[i] + barrier for j in modes):
+            modes.append(int(i))
+    points = tuple({k: np.asarray(v) for k, v in unravel(jnp.asarray(xs[i])).items()}
+                   for i in modes)
+    return ModeSearch(tuple(float(-pe[i]) for i in modes), points, starts, int(ok.sum()))
