@@ -164,7 +164,7 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
     x, n = jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float)
     if n.ndim > 0:  # a scalar n stays scalar: see _spline_eval
         x, n = jnp.broadcast_arrays(x, n)
-    inside = ((x >= 0.0) & (x <= X_MAX) & (n >= N_MIN - _N_TOL) & (n <= N_MAX + _N_TOL))
+    inside = surrogate.within_amplitude(x, X_MAX) & (n >= N_MIN - _N_TOL) & (n <= N_MAX + _N_TOL)
     s = surrogate.evaluate(tab, x, n, prefactor=lambda ns: ns - 1.0)
     return jnp.where(inside, s, jnp.nan)
 
