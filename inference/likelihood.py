@@ -18,9 +18,11 @@ import numpyro.distributions as dist
 
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
            "design_inputs", "simulate", "scene_quantities",
-           "OBSERVED_SITES"]
+           "OBSERVED_SITES", "OBSERVED_DATA_KEYS"]
 
 OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs")
+OBSERVED_DATA_KEYS = {"f0_obs": "f0", "shift_obs": "shift", "q_obs": "q_obs"}
+"""The model input that holds each observation site's values."""
 
 
 def model_inputs(ds: Any) -> dict[str, Any]:

@@ -18,7 +18,6 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 from numpyro.distributions.util import promote_shapes
@@ -40,20 +39,11 @@ def _log_overlap_and_slope(law, f0, kw):
     return jax.jvp(lambda f: log_overlap(law, f, kw), (f0,), (jnp.ones_like(f0),))
 
 
-def invert_log_overlap(law: str, target: Any, kw: dict[str, Any],
-                       guess: float = 2700.0) -> jnp.ndarray:
-    """f0 [Hz] with log delta0(f0) = target: Newton in log f0 (exact in one step where
-    delta0 ~ f0^-2, which holds for every built-in law; six steps guard the general case)."""
-    target = jnp.asarray(target, dtype=float)
-    u = jnp.full(target.shape, np.log(guess))
-
-    def fn(uu):
-        return log_overlap(law, jnp.exp(uu), kw)
-
-    for _ in range(6):
-        val, slope = jax.jvp(fn, (u,), (jnp.ones_like(u),))
-        u = u - (val - target) / slope
-    return jnp.exp(u)
+def invert_log_overlap(law: str, target: Any, kw: dict[str, Any]) -> jnp.ndarray:
+    """f0 [Hz] with log delta0(f0) = target: the law's inverse map
+    (:meth:`models.law.ContactLaw.frequency_at`; closed form for every built-in law but
+    the JKR family, a Newton solve there)."""
+    return get_law(law).frequency_at(jnp.exp(jnp.asarray(target, dtype=float)), **kw)
 
 
 class MeasuredF0(dist.Distribution):

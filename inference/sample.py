@@ -24,8 +24,10 @@ import arviz as az
 import jax
 import numpy as np
 import numpyro
-from numpyro.infer import MCMC, NUTS, Predictive, init_to_median
+from numpyro.infer import MCMC, NUTS, init_to_median
 
+from .draws import fit_draws, observed_data, sample_stats
+from .evidence import latent_site_names
 from .likelihood import without_observations
 from .variables import SAMPLE_STATS, SITE_DIMS, VARIABLES
 
@@ -208,33 +210,24 @@ def run_nuts(
     mcmc.run(k_run, data, extra_fields=EXTRA_FIELDS, init_params=init_params)
     jax.block_until_ready(mcmc.get_samples())
     t2 = time.perf_counter()
-    prior = post_pred = None
     pdata = prior_data if prior_data is not None else without_observations(data)
-    if predictive:
-        prior = Predictive(model, num_samples=prior_draws)(
-            k_prior, pdata)
-        samples = mcmc.get_samples()
-        post_pred = Predictive(model, posterior_samples=samples)(
-            k_post, pdata)
-        obs_names = [k for k in ("f0_obs", "shift_obs", "q_obs") if k in post_pred]
-        post_pred = {k: post_pred[k] for k in obs_names}
-        prior_pred = {k: prior[k] for k in obs_names if k in prior}
-        prior = {k: v for k, v in prior.items() if k not in obs_names}
+    samples = mcmc.get_samples(group_by_chain=True)
+    latents = latent_site_names(model, {"data": data})
+    groups = fit_draws(model, data, pdata, samples, latents, key_post=k_post,
+                       key_prior=k_prior, prior_draws=prior_draws, predictive=predictive)
     t3 = time.perf_counter()
     user = dict(coords or {})
     all_coords = idata_coords(data, user.get("protocol"))
     all_coords.update({k: np.asarray(list(v)) for k, v in user.items()})
     all_dims = {**SITE_DIMS, **(dims or {})}
-    kw: dict[str, Any] = {"log_likelihood": True, "coords": all_coords, "dims": all_dims}
-    if predictive:
-        kw.update(prior=prior, posterior_predictive=post_pred)
-    idata = az.from_numpyro(mcmc, **kw)
-    if predictive and prior_pred:
-        # from_numpyro puts observed-site draws of `prior` into prior_predictive only
-        # when given together; add them explicitly (shapes: 1 chain x draws).
-        pp = az.from_dict(prior_predictive={k: v[None] for k, v in prior_pred.items()},
-                          coords=all_coords, dims=all_dims)
-        idata.extend(pp)
+    # built here, not by az.from_numpyro: that one runs the model eagerly (slow for the
+    # table laws) and counts the law-domain factor as an observation
+    idata = az.from_dict(
+        posterior={k: np.asarray(v) for k, v in samples.items()},
+        sample_stats=sample_stats(mcmc.get_extra_fields(group_by_chain=True)),
+        observed_data=observed_data(data, groups["log_likelihood"]),
+        coords=all_coords, dims=all_dims,
+        **{g: v for g, v in groups.items() if v})
     extra = _sweep_coords(data, all_coords["protocol"])
     for group in idata.groups():
         ds = idata[group]

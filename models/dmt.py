@@ -41,6 +41,7 @@ __all__ = [
     "force",
     "shift_first_order",
     "overlap_from_frequency",
+    "frequency_from_overlap",
 ]
 
 
@@ -169,6 +170,14 @@ def overlap_from_frequency(
     return 1.5 * (load + fc) / (mass * jnp.square(2.0 * jnp.pi * f0))
 
 
+def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike, *,
+                           radius: ArrayLike, gamma: ArrayLike) -> jnp.ndarray:
+    """f0 = (3 (F0 + Fc) / (2 m delta0))^(1/2) / (2 pi) [Hz], the inverse of
+    :func:`overlap_from_frequency`."""
+    fc = pull_off_force(gamma=gamma, radius=radius)
+    return jnp.sqrt(1.5 * (load + fc) / (mass * delta0)) / (2.0 * jnp.pi)
+
+
 def _law():
     from .backbone_table import X_MAX
     from .law import GAMMA, YOUNG, ContactLaw
@@ -191,6 +200,8 @@ def _law():
         # the elastic scale E* R^(1/2) scatters, not the adhesion (as for JKR)
         overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
             overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
+        frequency_from_overlap=lambda d, *, load, mass, radius, gamma, **_:
+            frequency_from_overlap(d, load, mass, radius=radius, gamma=gamma),
         # first order: the DMT stiffness is Hertz's, so in x = delta_a/delta0 (the DMT
         # overlap) the average is exactly the Hertz one
         shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),

@@ -39,7 +39,8 @@ import numpy as np
 from .backbone import orbit
 from .quadrature import bisect, polish, tanh_sinh
 
-__all__ = ["static_overlap", "overlap_from_frequency", "stiffness", "first_order_shift",
+__all__ = ["static_overlap", "overlap_from_frequency", "stiffness_scale_frequency",
+           "frequency_from_overlap", "stiffness", "first_order_shift",
            "restoring_force", "backbone_orbit", "backbone_shift", "lindstedt_coefficient",
            "contact_loss_turning_point", "contact_loss_onset"]
 
@@ -86,6 +87,32 @@ def overlap_from_frequency(law: Any, f0: Any, **kw: Any) -> jnp.ndarray:
 
     lo = jnp.full(jnp.shape(target), _LOG_LO)
     u = polish(g, bisect(g, lo, jnp.full(jnp.shape(target), _LOG_HI), iters=80))
+    return jnp.exp(u)
+
+
+def stiffness_scale_frequency(law: Any, delta0: Any, **kw: Any) -> jnp.ndarray:
+    """f0 = (load F'(delta0) / (m F(delta0)))^(1/2) / (2 pi) [Hz]: the inverse of
+    :func:`overlap_from_frequency` in closed form (stiffness-scale scatter), delta0 [m]."""
+    d = jnp.asarray(delta0, float)
+    val, k = jax.jvp(_force(law, kw), (d,), (jnp.ones_like(d),))
+    return jnp.sqrt(kw["load"] * k / (kw["mass"] * val)) / (2.0 * jnp.pi)
+
+
+def frequency_from_overlap(law: Any, delta0: Any, *, steps: int = 6,
+                           guess: float = 2700.0, **kw: Any) -> jnp.ndarray:
+    """f0 [Hz] with ``law.overlap_at(f0) = delta0`` [m], for a law whose own f0 -> delta0
+    map has no closed-form inverse: Newton in log f0 on log delta0 from ``guess`` [Hz]
+    (exact in one step where delta0 ~ f0^-2, which every smooth law nearly is; ``steps``
+    guard the rest)."""
+    target = jnp.log(jnp.asarray(delta0, float))
+    u = jnp.full(target.shape, np.log(guess))
+
+    def fn(uu):
+        return jnp.log(law.overlap_at(jnp.exp(uu), **kw))
+
+    for _ in range(steps):
+        val, slope = jax.jvp(fn, (u,), (jnp.ones_like(u),))
+        u = u - (val - target) / slope
     return jnp.exp(u)
 
 

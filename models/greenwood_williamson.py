@@ -324,6 +324,12 @@ def _law():
         s = sigma(kw)
         return overlap_from_frequency(f0, kw["load"], kw["mass"], sigma=s) + SUMMIT_CUTOFF * s
 
+    def _frequency(delta0, **kw):
+        # the inverse of _overlap_f0: omega0^2 = F0 F'/(m F) (stiffness-scale scatter)
+        d = jnp.asarray(delta0, float)
+        val, k = jax.jvp(lambda x: _force(x, **kw), (d,), (jnp.ones_like(d),))
+        return jnp.sqrt(kw["load"] * k / (kw["mass"] * val)) / (2.0 * jnp.pi)
+
     return ContactLaw(
         name="greenwood_williamson", label="rough sphere (Greenwood-Williamson)",
         color="#999933",
@@ -337,7 +343,7 @@ def _law():
                      "contact there, 1.5 at 4); the fits count no point below"),
         params=(YOUNG, factor), force=_force, static_overlap=_overlap,
         # the protocols scatter by the elastic scale E* R^(1/2) (F/F' does not depend on it)
-        overlap_from_frequency=_overlap_f0,
+        overlap_from_frequency=_overlap_f0, frequency_from_overlap=_frequency,
         in_default_comparison=True,
         shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
             "greenwood_williamson", x, delta0 / sigma(kw))},

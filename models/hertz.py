@@ -24,6 +24,7 @@ __all__ = [
     "linear_stiffness",
     "linear_frequency",
     "overlap_from_frequency",
+    "frequency_from_overlap",
     "stiffness_constant",
 ]
 
@@ -74,6 +75,12 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike) -> j
     return 1.5 * load / (mass * jnp.square(2.0 * jnp.pi * f0))
 
 
+def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike) -> jnp.ndarray:
+    """f0 = (3 F0 / (2 m delta0))^(1/2) / (2 pi) [Hz]: the inverse of
+    :func:`overlap_from_frequency` (delta0 [m], F0 [N], m [kg])."""
+    return jnp.sqrt(1.5 * load / (mass * delta0)) / (2.0 * jnp.pi)
+
+
 def _law():
     from .backbone_table import backbone_shift_clipped
     from .law import YOUNG, ContactLaw
@@ -91,6 +98,8 @@ def _law():
             load, e_star=e_star, radius=radius),
         overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
             f0, load, mass),
+        frequency_from_overlap=lambda d, *, load, mass, **_: frequency_from_overlap(
+            d, load, mass),
         # the paper analysed this law at first order: its 'paper_eq25' rung is first order
         rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": lambda x, **_: first_order_hertz(x),

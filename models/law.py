@@ -133,6 +133,9 @@ class ContactLaw:
 
     * ``static_overlap(**kw)`` -> delta0 [m] under ``load``;
     * ``overlap_from_frequency(f0, **kw)`` -> delta0 [m] a measured f0 [Hz] implies;
+    * ``frequency_from_overlap(delta0, **kw)`` -> f0 [Hz], its inverse (:meth:`frequency_at`;
+      a law that sets ``overlap_from_frequency`` with a scatter treatment of its own
+      should set it, else the inverse is a Newton solve of ``overlap_from_frequency``);
     * ``shifts``: rung name -> ``fn(x, **kw)`` with ``delta0`` [m] and ``omega0``
       [rad/s] among the keywords (per sweep);
     * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
@@ -166,6 +169,7 @@ class ContactLaw:
     shifts: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     static_overlap: Callable[..., Any] | None = None
     overlap_from_frequency: Callable[..., Any] | None = None
+    frequency_from_overlap: Callable[..., Any] | None = None
     linear_q: Callable[..., Any] | None = None
     contact_edge: Callable[..., Any] | None = None
     domains: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
@@ -220,6 +224,20 @@ class ContactLaw:
         from .generic import overlap_from_frequency
 
         return overlap_from_frequency(self, f0, **kw)
+
+    def frequency_at(self, delta0: Any, **kw: Any) -> Any:
+        """f0 [Hz] of a protocol whose static overlap is delta0 [m]: the inverse of
+        :meth:`overlap_at`. The law's closed form; for the default scatter treatment
+        (no ``overlap_from_frequency``) omega0^2 = load F'(delta0)/(m F(delta0)); else a
+        Newton solve of :meth:`overlap_at` (:func:`models.generic.frequency_from_overlap`).
+        """
+        from . import generic
+
+        if self.frequency_from_overlap is not None:
+            return self.frequency_from_overlap(delta0, **kw)
+        if self.overlap_from_frequency is None:
+            return generic.stiffness_scale_frequency(self, delta0, **kw)
+        return generic.frequency_from_overlap(self, delta0, **kw)
 
     def edge(self, **kw: Any) -> Any:
         """Overlap [m] at which contact is lost (0 unless the law is adhesive)."""

@@ -26,6 +26,7 @@ __all__ = [
     "linear_stiffness",
     "linear_frequency",
     "overlap_from_frequency",
+    "frequency_from_overlap",
 ]
 
 
@@ -76,6 +77,13 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike,
     return n * load / (mass * jnp.square(2.0 * jnp.pi * f0))
 
 
+def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike,
+                           n: ArrayLike) -> jnp.ndarray:
+    """f0 = (n F0 / (m delta0))^(1/2) / (2 pi) [Hz], the inverse of
+    :func:`overlap_from_frequency`."""
+    return jnp.sqrt(n * load / (mass * delta0)) / (2.0 * jnp.pi)
+
+
 def _law():
     import math
 
@@ -107,6 +115,8 @@ def _law():
         static_overlap=lambda *, delta0_ref_log, **_: jnp.exp(delta0_ref_log),
         overlap_from_frequency=lambda f0, *, load, mass, n, **_: overlap_from_frequency(
             f0, load, mass, n),
+        frequency_from_overlap=lambda d, *, load, mass, n, **_: frequency_from_overlap(
+            d, load, mass, n),
         # the paper analysed this law at first order: its 'paper_eq25' rung is first order
         rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),

@@ -259,6 +259,8 @@ def _law(split: bool):
             load, e_star=e_star, radius=radius),
         overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
             f0, load, mass),
+        frequency_from_overlap=lambda d, *, load, mass, **_: hertz.frequency_from_overlap(
+            d, load, mass),
         rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": lambda x, **_: shift_first_order(x),
                 "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),

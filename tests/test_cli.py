@@ -21,7 +21,8 @@ from workflows.cli import COMMAND_MODULES, build_parser, main
 
 # --allow-failed: a few draws fail the gate, which would make the exit status 1
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--live-points", "30",
-        "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet", "--allow-failed"]
+        "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet", "--allow-failed",
+        "--workers", "1"]  # in process unless a test asks for workers (they come after)
 
 
 def _subcommands() -> list[str]:

@@ -504,3 +504,17 @@ def test_cache_key_follows_the_model_inputs():
     c = copy.deepcopy(DEFAULTS)
     c["out"], c["quiet"], c["workers"] = "elsewhere", True, 3  # where and how, not what
     assert key(c) == k0
+
+
+def test_code_digest_follows_the_code(tmp_path):
+    """A fit made by other code (a changed law file, a changed package file) has another
+    key: the digest covers the packages and the law's own file."""
+    from workflows.pipeline import code_digest
+
+    law_file = tmp_path / "law.py"
+    law_file.write_text("NAME = 'a'\n")
+    d0 = code_digest((str(law_file),))
+    assert code_digest((str(law_file),)) == d0 and d0 != code_digest()
+    law_file.write_text("NAME = 'b'\n")
+    code_digest.cache_clear()  # a new process: the digest is cached per run
+    assert code_digest((str(law_file),)) != d0

@@ -70,3 +70,28 @@ def test_rung_refused_not_swapped():
     law, kw, d0 = _kw("dmt", young=200e9, gamma=0.7)
     with pytest.raises(RungUnavailable, match="paper_eq25"):
         law.shift(X, rung="paper_eq25", **kw)
+
+
+FULL_SCENE = {**SCENE, "roughness_rms": 25e-9, "surface_energy": 0.05}
+
+
+@pytest.mark.parametrize("name", registry.law_names())
+def test_frequency_at_inverts_overlap_at(name):
+    # the f0 -> delta0 map every model conditions on, and its inverse (predictive f0)
+    from models.law import prior_median
+
+    law = registry.get_law(name)
+    kw = law.resolve(FULL_SCENE, {p.name: prior_median(p.prior) for p in law.params})
+    f0 = jnp.array([2400.0, 2700.0, 3100.0])
+    back = law.frequency_at(law.overlap_at(f0, **kw), **kw)
+    np.testing.assert_allclose(back, f0, rtol=1e-10)
+
+
+def test_inverse_frequency_maps_against_the_hertz_closed_form():
+    law, kw, _ = _kw("hertz", young=200e9)
+    d = jnp.array([30e-9, 55e-9, 90e-9])
+    exact = np.sqrt(1.5 * SCENE["load"] / (SCENE["mass"] * d)) / (2 * np.pi)
+    np.testing.assert_allclose(generic.stiffness_scale_frequency(law, d, **kw), exact,
+                               rtol=1e-12)
+    np.testing.assert_allclose(generic.frequency_from_overlap(law, d, **kw), exact,
+                               rtol=1e-12)

@@ -129,8 +129,8 @@ def add_sampling_args(p: argparse.ArgumentParser) -> None:
                    f"(default: {DEFAULTS['seed']})")
     p.add_argument("--chains", type=int, help=f"NUTS chains (default: {s['chains']})")
     p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
-                   "processes (default: 0, one per two usable cores, at most 4; 1: no worker "
-                   "processes); the results do not depend on it")
+                   "processes (default: 0, two or one per two usable cores, at most 4; "
+                   "1: no worker processes); the results do not depend on it")
     p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain, >= 20 "
                    f"(default: {s['warmup']})")
     p.add_argument("--samples", type=int, help="NUTS draws per chain, >= 20 "

@@ -9,6 +9,7 @@ from a second copy of a formula. Colours and labels: :mod:`workflows.styles`.
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -135,9 +136,11 @@ def _shift_figures(save, runs, specs, inputs, ds, pref: str | None) -> None:
         pp = getattr(run.idata, "posterior_predictive", None)
         if name not in specs or pp is None or "shift_obs" not in pp:
             continue
-        panels.append(figure_data.shift_panel(name, _label(run), specs[name], run.idata,
-                                              inputs, ds,
-                                              status=run.summary.get("status", "ok")))
+        status = run.summary.get("status", "ok")
+        pre = (run.figure_data or {}).get("shift_panel")  # computed with the fit
+        panels.append(replace(pre, label=_label(run), status=status) if pre is not None
+                      else figure_data.shift_panel(name, _label(run), specs[name], run.idata,
+                                                   inputs, ds, status=status))
     if not panels:
         return
     floor = figure_data.noise_floor(panels)
@@ -176,13 +179,15 @@ def _theory_figures(save, runs, specs, inputs, scene) -> None:
     from models import shift
     from models.backbone_table import backbone_shift_fast
 
-    x_grid = np.linspace(1e-3, 1.3, 200)
+    x_grid = figure_data.THEORY_X
     fitted_laws = {getattr(spec, "law", None) for spec in specs.values()}
     curves = theory_curves(scene, x_grid, figure_laws(fitted_laws))
     for name, run in runs.items():
         if name not in specs:
             continue
-        q05, q50, q95 = figure_data.fitted_curve(specs[name], run.idata, x_grid, inputs)
+        pre = (run.figure_data or {}).get("fitted_curve")  # computed with the fit
+        q05, q50, q95 = pre if pre is not None else figure_data.fitted_curve(
+            specs[name], run.idata, x_grid, inputs)
         # the law-free baseline has no rung (its delta0 is the Hertz overlap from f0)
         rung = "" if "baseline" in (name, getattr(specs[name], "law", "")) else \
             f", {getattr(specs[name], 'rung', '').replace('_', ' ')}"

@@ -98,7 +98,9 @@ def _pair(pair: tuple[str, str] | None) -> tuple[str, str]:
 
 def _paper_cfg(cfg: dict[str, Any]) -> dict[str, Any]:
     # the paper pair's log Bayes factor: bridge sampling from the NUTS draws suffices
-    return {**cfg, "evidence": {**cfg["evidence"], "methods": ["bridge"]}}
+    # and no figure of its own (only its log Z and draws enter the tension's)
+    return {**cfg, "evidence": {**cfg["evidence"], "methods": ["bridge"]},
+            "report": {**cfg.get("report", {}), "figures": False}}
 
 
 def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
@@ -211,6 +213,9 @@ def fit_checks(runs: dict[str, Any]) -> dict[str, Any]:
 
     out: dict[str, Any] = {}
     for name, run in runs.items():
+        if run.summary.get("loo_pit") is not None:  # computed with the fit
+            out[name] = run.summary["loo_pit"]
+            continue
         try:
             out[name] = loo_pit_summary(run.idata, "shift_obs")
         except Exception as exc:  # noqa: BLE001 (a degenerate tiny run: say so, go on)

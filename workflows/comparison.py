@@ -59,6 +59,19 @@ def job_steps(job: Job) -> int:
 _DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
 
 
+def _figure_data(run: LawRun, spec: Any, inputs: dict[str, Any], ds: Any) -> Any:
+    # what the figures compute from this fit, here where the fit ran (a worker process:
+    # its compilation overlaps the other fits); None leaves it to the figures
+    from .figure_data import law_figure_data
+
+    try:
+        return law_figure_data(run.name, spec, run.idata, inputs, ds)
+    except Exception as exc:  # noqa: BLE001 (the figures retry it and say why)
+        log.warning("%s: figure data not computed with the fit (%s: %s)", run.name,
+                    type(exc).__name__, exc)
+        return None
+
+
 class _Jobs:
     """The job runner of compare, fit and rungs (workflows.parallel.JobRunner): "fit"
     (pipeline.fit_law), "eta" (the eta draws of one extra NUTS fit of the tension's law,
@@ -66,8 +79,11 @@ class _Jobs:
 
     def run(self, job: Job, resume: bool, ds: Any, inputs: dict[str, Any]) -> Any:
         if job.kind == "fit":
-            return fit_law(job.name, job.spec, inputs, ds, job.cfg, Path(job.out),
-                           resume=resume, job=job.key)
+            run = fit_law(job.name, job.spec, inputs, ds, job.cfg, Path(job.out),
+                          resume=resume, job=job.key)
+            if job.cfg.get("report", {}).get("figures", False):
+                run.figure_data = _figure_data(run, job.spec, inputs, ds)
+            return run
         t0 = time.perf_counter()
         if job.kind == "eta":
             from .compare_outputs import nuts_eta
@@ -101,14 +117,16 @@ class _Jobs:
             _DATA[key] = (ds, model_inputs(ds))
         res = self.run(job, resume, *_DATA[key])
         # a LawRun's InferenceData travels through its netCDF file, not through the pipe
-        return res.summary if job.kind == "fit" else res
+        return (res.summary, res.figure_data) if job.kind == "fit" else res
 
     def collect(self, job: Job, value: Any) -> Any:
         if job.kind != "fit":
             return value
         from .idata_io import load_idata
 
-        return LawRun(job.name, value, load_idata(Path(job.out) / "idata" / f"{job.name}.nc"))
+        summary, fig_data = value
+        return LawRun(job.name, summary, load_idata(Path(job.out) / "idata" / f"{job.name}.nc"),
+                      fig_data)
 
 
 JOBS = _Jobs()

@@ -38,8 +38,9 @@ DEFAULTS: dict[str, Any] = {
     "rung": DEFAULT_RUNG,  # forward-model rung of every law (models.rungs.FIT_RUNGS)
     "seed": 0,
     "quiet": False,
-    # worker processes for the fits (workflows.parallel): 0 = one per two usable cores, at
-    # most 4; 1 = all in this process. The numbers do not depend on it, the wall time does.
+    # worker processes for the fits (workflows.parallel): 0 = two, or one per two usable
+    # cores where there are more (at most 4); 1 = all in this process. The numbers do not
+    # depend on it, the wall time does.
     "workers": 0,
     # 4 x 1000 draws: with 4 x 400 the rank-normalised R-hat of a well-mixed run (ESS ~1000)
     # scattered across the 1.01 gate (measured 1.005-1.014 for Hertz between seeds)
@@ -84,7 +85,7 @@ DESCRIPTIONS: dict[str, str] = {
     "rung": "forward model: " + " | ".join(RUNGS),
     "seed": "random seed (same seed, same numbers)",
     "quiet": "no progress output (the log file keeps everything)",
-    "workers": "worker processes for the fits: 0 = one per two usable cores (at most 4), "
+    "workers": "worker processes for the fits: 0 = two, or one per two usable cores (at most 4), "
                "1 = all in this process; the numbers do not depend on it",
     "sampling.chains": "NUTS chains",
     "sampling.warmup": "NUTS warmup (adaptation) iterations per chain",
@@ -114,7 +115,7 @@ DESCRIPTIONS: dict[str, str] = {
 # the smallest values that can work, and why
 _INT_MIN: dict[str, tuple[int, str]] = {
     "seed": (0, ""),
-    "workers": (0, "0 = one per two cores"),
+    "workers": (0, "0 = two, or one per two cores"),
     "sampling.chains": (1, ""),
     # below 20 numpyro adapts the step size only, never the mass matrix
     "sampling.warmup": (20, "numpyro adapts the mass matrix from 20 on"),

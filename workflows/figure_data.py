@@ -13,7 +13,11 @@ import numpy as np
 from .plots_ppc import ShiftPanel
 
 __all__ = ["thin", "posterior_interval", "data_overlap", "shift_panel",
-           "standardised_residuals", "fitted_curve", "noise_floor"]
+           "standardised_residuals", "fitted_curve", "noise_floor", "THEORY_X",
+           "law_figure_data"]
+
+THEORY_X = np.linspace(1e-3, 1.3, 200)
+"""x = delta_a/delta0 of the theory figure (nominal and fitted shift curves)."""
 
 
 def thin(idata: Any, max_draws: int) -> Any:
@@ -121,3 +125,16 @@ def noise_floor(panels: list[ShiftPanel]) -> float:
     s = 0.1 * min(p.sigma for p in panels)
     e = np.floor(np.log10(s))
     return float(np.floor(s / 10**e) * 10**e)
+
+
+def law_figure_data(name: str, spec: Any, idata: Any, inputs: dict[str, Any],
+                    ds: Any) -> dict[str, Any]:
+    """What the comparison's figures compute from one fit: its fitted curve on
+    :data:`THEORY_X` ('fitted_curve') and its shift panel ('shift_panel', labelled with
+    the law's name; the figure relabels it). Computed where the fit ran (a worker
+    process), so that the figures' serial part only draws."""
+    out: dict[str, Any] = {"fitted_curve": fitted_curve(spec, idata, THEORY_X, inputs)}
+    pp = getattr(idata, "posterior_predictive", None)
+    if pp is not None and "shift_obs" in pp:
+        out["shift_panel"] = shift_panel(name, name, spec, idata, inputs, ds)
+    return out

@@ -65,17 +65,19 @@ class JobRunner(Protocol):
 
 
 def resolve_workers(value: int | None, n_jobs: int) -> int:
-    """Worker processes for ``n_jobs`` jobs: 0 (or None) = one per two usable cores (at
-    most 4), else the integer given; 1 runs everything in this process.
+    """Worker processes for ``n_jobs`` jobs: 0 (or None) = two, or one per two usable
+    cores where there are more (at most 4), else the integer given; 1 runs everything in
+    this process.
 
-    One per two cores because one fit alone already keeps about two cores busy (NUTS
-    chains and jaxns shards on the host devices): on the 2-core machine the full cold
-    comparison took 388 s with two workers against 404 s with one (a two-law run 114 s
-    against 136 s), not worth twice the memory."""
+    Two on a 2-core machine: one fit keeps both cores busy only while it samples; while it
+    traces and compiles (most of a fit, and single-threaded) the other worker's fit runs.
+    Measured, the default comparison on the 2-core CPU: cold 5:18 with two workers
+    against 6:28 with one, warm 2:19 against 3:02 (each process ~3 GB). Beyond two, one
+    per two cores, as one sampling fit keeps two cores busy."""
     if not value:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else (os.cpu_count() or 1)
-        value = min(4, cores // 2)
+        value = 1 if cores < 2 else min(4, max(2, cores // 2))
     return max(1, min(int(value), n_jobs))
 
 

@@ -8,6 +8,7 @@ with the key (data hash, law config, beadrod version) so ``--resume`` skips it.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import logging
@@ -127,11 +128,14 @@ def load_data(cfg: dict[str, Any]):
 
 @dataclass
 class LawRun:
-    """What the pipeline keeps of one fitted law (JSON-ready summary + its InferenceData)."""
+    """What the pipeline keeps of one fitted law (JSON-ready summary + its InferenceData);
+    ``figure_data``: what the figures compute from the fit, when it was computed with the
+    fit (workflows.figure_data.law_figure_data; None: the figures compute it)."""
 
     name: str
     summary: dict[str, Any]
     idata: Any
+    figure_data: dict[str, Any] | None = None
 
 
 def _param_summary(idata: Any, truth: dict[str, Any] | None) -> list[dict[str, Any]]:
@@ -187,17 +191,41 @@ def inputs_digest(inputs: dict[str, Any]) -> str:
     return h.hexdigest()
 
 
+@functools.cache
+def code_digest(extra: tuple[str, ...] = ()) -> str:
+    """sha256 of the code a fit runs: every file of the ``models`` and ``inference``
+    packages (sources and tables) and the files ``extra`` (a law file's path), so that a
+    resumed run does not reuse a fit made by other code under the same version."""
+    import inference
+    import models
+
+    h = hashlib.sha256()
+    roots = [Path(models.__file__).parent, Path(inference.__file__).parent]
+    files = [f for r in roots for f in sorted(r.rglob("*"))
+             if f.is_file() and "__pycache__" not in f.parts]
+    for f in files + [Path(e) for e in extra]:
+        h.update(f"<{f.name}>".encode())
+        h.update(f.read_bytes() if f.is_file() else b"missing")
+    return h.hexdigest()
+
+
 def _cache_key(name: str, spec: Any, cfg: dict[str, Any], inputs: dict[str, Any],
                data_hash: str) -> str:
     """What a cached fit must match to be reused: the whole ModelSpec (law, rung,
     likelihood, use_q, ...), every config key that can change the fit (sampling, evidence,
-    seed, likelihood options, ...), the model inputs, the raw data hash and the version."""
+    seed, likelihood options, ...), the model inputs, the raw data hash, the version and
+    the code (:func:`code_digest`, with the law's own file for a law file's law)."""
     from dataclasses import asdict
 
+    from inference.numpyro_models import law_of
+
+    law = law_of(spec)
+    source = (law.source,) if law is not None and law.source != "built-in" else ()
     blob = json.dumps({"law": name, "spec": asdict(spec),
                        "cfg": {k: v for k, v in cfg.items() if k not in _NOT_IN_FIT},
                        "inputs": inputs_digest(inputs), "data": data_hash,
-                       "version": beadrod_version()}, sort_keys=True, default=repr)
+                       "version": beadrod_version(), "code": code_digest(source)},
+                      sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
@@ -238,6 +266,7 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     names the fit in the progress records (workflows.progress; default ``name``)."""
     from inference import diagnostics
     from inference.bridge import bridge_sampling_log_z
+    from inference.compare import loo_pit_summary
     from inference.evidence import combined_agreement, nested_sampling_log_z, smc_log_z
     from inference.numpyro_models import build_model
     from inference.sample import run_nuts
@@ -338,8 +367,13 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         "pareto_k_bad": loo["k_bad"] + loo["k_very_bad"], "loo": loo,
         "timings": timings, "modes": modes, "data_hash": ds.data_hash, "cache_key": key,
     }
+    try:  # the report's calibration check, here where the fit ran (a worker process)
+        summary["loo_pit"] = loo_pit_summary(fit.idata, "shift_obs")
+    except Exception as exc:  # noqa: BLE001 (a degenerate tiny run: say so, go on)
+        summary["loo_pit"] = {"error": f"{type(exc).__name__}: {exc}"}
     save_idata(fit.idata, idata_path)
     write_json(summary_path, summary)
+
     done(log, job, "%s: finished (%s, %.0f s)", name, "ok" if not failures else "FAILED",
          timings["total_s"], steps=0, final=True)
     return LawRun(name, summary, fit.idata)
