@@ -78,7 +78,7 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
     def program(flat, k_post, k_prior):
         keys = jax.random.split(k_post, n)
         post = jax.lax.map(post_one, (flat, keys), batch_size=min(BATCH, n))
-        if not predictive:
+        if not predictive or prior_draws <= 0:
             return post, {}
         prior = jax.lax.map(prior_one, jax.random.split(k_prior, prior_draws),
                             batch_size=min(BATCH, prior_draws))

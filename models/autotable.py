@@ -30,7 +30,7 @@ _Q = jnp.array([-0.95, -0.6, -0.2, 0.3, 1.0, 2.5])
 _TOL = 1e-9
 _KNOTS = 40   # per region: 1e-7 of the exact curve for a Hertz law (tests/test_lawfile.py)
 _NODES = 24   # orbit rule of the samples (spectral on the contact arc, as models.shape_tables)
-_X_MAX = 2.0
+_X_MAX = surrogate.X_MAX
 
 
 def _quantile(prior: Any, q: float) -> float:

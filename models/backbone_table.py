@@ -75,7 +75,7 @@ __all__ = [
     "SPEC",
 ]
 
-X_MAX = 2.0
+X_MAX = surrogate.X_MAX
 N_MIN, N_MAX = 1.0, 3.0
 _N_TOL = 1e-9
 TABLE_PATH = pathlib.Path(__file__).with_name("data") / "backbone_table.npz"

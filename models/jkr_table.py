@@ -44,11 +44,11 @@ from jax.typing import ArrayLike
 from ._math import knot_cell
 from ._tables import rebuild_cli
 from .jkr_contact import shift_first_order
+from .surrogate import X_MAX
 
 __all__ = ["X_MAX", "R_MIN", "R_MAX", "TABLE_PATH", "load_ratio", "shift_first_order_fast",
            "build_table", "load_table", "reference_shift"]
 
-X_MAX = 2.0
 R_MIN, R_MAX = 1e-3, 1e6
 TABLE_PATH = pathlib.Path(__file__).with_name("data") / "jkr_table.npz"
 

@@ -28,7 +28,7 @@ from . import surrogate
 
 __all__ = ["X_MAX", "TABLE_PATH", "backbone_fast", "in_table", "load_table", "shape_range"]
 
-X_MAX = 2.0
+X_MAX = surrogate.X_MAX
 """Largest tabulated amplitude x = delta_a/delta0 [-]; beyond it the value is held."""
 TABLE_PATH = pathlib.Path(__file__).with_name("data") / "shape_tables.npz"
 

@@ -37,8 +37,12 @@ import numpy as np
 
 from ._math import knot_cell
 
-__all__ = ["BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
+__all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
            "chebyshev_basis", "kink_amplitude", "to_chebyshev", "spline_coefficients"]
+
+X_MAX = 2.0
+"""The largest x = delta_a/delta0 [-] every backbone table covers (the bead flies over
+twice its overlap); the one definition the tables and their domains share."""
 
 
 @dataclass(frozen=True)
@@ -204,7 +208,7 @@ def kink_amplitude(table: dict[str, np.ndarray], p: jnp.ndarray, p_lo: float,
     return jnp.sum(chebyshev_basis(nu, xc_cheb.shape[-1]) * xc_cheb, axis=-1)
 
 
-def within_amplitude(x: jnp.ndarray, x_max: float = 2.0) -> jnp.ndarray:
+def within_amplitude(x: jnp.ndarray, x_max: float = X_MAX) -> jnp.ndarray:
     """True where 0 <= x <= x_max [-], the amplitudes a backbone table covers. Beyond
     x_max :func:`evaluate` holds the x_max value (the bead flies over more than twice its
     overlap), which is not the backbone there: the laws' ``domains`` use this test."""
