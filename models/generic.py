@@ -40,6 +40,7 @@ from .backbone import orbit
 from .quadrature import bisect, polish, tanh_sinh
 
 __all__ = ["static_overlap", "overlap_from_frequency", "stiffness_scale_frequency",
+           "frequency_of_force",
            "frequency_from_overlap", "stiffness", "first_order_shift",
            "restoring_force", "backbone_orbit", "backbone_shift", "lindstedt_coefficient",
            "contact_loss_turning_point", "contact_loss_onset"]
@@ -90,12 +91,18 @@ def overlap_from_frequency(law: Any, f0: Any, **kw: Any) -> jnp.ndarray:
     return jnp.exp(u)
 
 
-def stiffness_scale_frequency(law: Any, delta0: Any, **kw: Any) -> jnp.ndarray:
-    """f0 = (load F'(delta0) / (m F(delta0)))^(1/2) / (2 pi) [Hz]: the inverse of
-    :func:`overlap_from_frequency` in closed form (stiffness-scale scatter), delta0 [m]."""
+def frequency_of_force(force: Any, delta0: Any, *, load: Any, mass: Any) -> jnp.ndarray:
+    """f0 = (load F'(delta0) / (m F(delta0)))^(1/2) / (2 pi) [Hz] for a force F(delta) [N]
+    (one-argument callable), delta0 [m]: the stiffness-scale inverse of
+    :func:`overlap_from_frequency` in closed form."""
     d = jnp.asarray(delta0, float)
-    val, k = jax.jvp(_force(law, kw), (d,), (jnp.ones_like(d),))
-    return jnp.sqrt(kw["load"] * k / (kw["mass"] * val)) / (2.0 * jnp.pi)
+    val, k = jax.jvp(force, (d,), (jnp.ones_like(d),))
+    return jnp.sqrt(load * k / (mass * val)) / (2.0 * jnp.pi)
+
+
+def stiffness_scale_frequency(law: Any, delta0: Any, **kw: Any) -> jnp.ndarray:
+    """:func:`frequency_of_force` with the law's force and resolved keywords ``kw``."""
+    return frequency_of_force(_force(law, kw), delta0, load=kw["load"], mass=kw["mass"])
 
 
 def frequency_from_overlap(law: Any, delta0: Any, *, steps: int = 6,

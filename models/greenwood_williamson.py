@@ -325,10 +325,11 @@ def _law():
         return overlap_from_frequency(f0, kw["load"], kw["mass"], sigma=s) + SUMMIT_CUTOFF * s
 
     def _frequency(delta0, **kw):
-        # the inverse of _overlap_f0: omega0^2 = F0 F'/(m F) (stiffness-scale scatter)
-        d = jnp.asarray(delta0, float)
-        val, k = jax.jvp(lambda x: _force(x, **kw), (d,), (jnp.ones_like(d),))
-        return jnp.sqrt(kw["load"] * k / (kw["mass"] * val)) / (2.0 * jnp.pi)
+        # the inverse of _overlap_f0 (stiffness-scale scatter, as models.generic's)
+        from .generic import frequency_of_force
+
+        return frequency_of_force(lambda x: _force(x, **kw), delta0, load=kw["load"],
+                                  mass=kw["mass"])
 
     return ContactLaw(
         name="greenwood_williamson", label="rough sphere (Greenwood-Williamson)",
