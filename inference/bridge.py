@@ -83,6 +83,35 @@ def _relative_error(l1: np.ndarray, l2: np.ndarray, log_r: float,
     return float(np.sqrt(re2)), ess
 
 
+def _program(model: Callable, model_kwargs: dict, chains: int, half: int, n2: int,
+             known: bool) -> Callable:
+    """The compiled part of bridge sampling: the draws mapped to the unconstrained space,
+    split into the proposal's and the bridge's halves of each chain, the proposal's mean
+    and Cholesky factor from the first halves, ``n2`` proposal draws and log q at them
+    (and at the bridge draws unless ``known``)."""
+
+    def log_q(x, unravel):
+        return -potential_energy(model, (), model_kwargs, unravel(x))
+
+    @jax.jit
+    def program(flat_draws, key):
+        u = jax.vmap(lambda p: unconstrain_fn(model, (), model_kwargs, p))(flat_draws)
+        _, unravel = jax.flatten_util.ravel_pytree(jax.tree_util.tree_map(lambda a: a[0], u))
+        flat = jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u)
+        flat = flat.reshape(chains, -1, flat.shape[-1])
+        fit = flat[:, :half].reshape(-1, flat.shape[-1])
+        bridge = flat[:, half:].reshape(-1, flat.shape[-1])
+        dim = fit.shape[1]
+        mean = fit.mean(axis=0)
+        chol = jnp.linalg.cholesky(jnp.atleast_2d(jnp.cov(fit, rowvar=False))
+                                   + 1e-12 * jnp.eye(dim))
+        prop = mean + jax.random.normal(key, (n2, dim)) @ chol.T
+        lq = jax.vmap(lambda x: log_q(x, unravel))
+        return mean, chol, bridge, prop, (None if known else lq(bridge)), lq(prop)
+
+    return program
+
+
 def bridge_sampling_log_z(
     model: Callable,
     model_kwargs: dict | None,
@@ -90,12 +119,16 @@ def bridge_sampling_log_z(
     *,
     num_proposal: int | None = None,
     seed: int = 0,
+    log_density: Any = None,
 ) -> EvidenceResult:
     """log Z of ``model(**model_kwargs)`` from its posterior draws by bridge sampling.
 
     ``posterior`` maps every latent site to its constrained draws shaped (chains, draws,
     ...) (``idata.posterior`` works, or ``mcmc.get_samples(group_by_chain=True)``).
     ``num_proposal`` defaults to the number of bridge draws (half of all draws).
+    ``log_density``: log q(u) = -potential_energy at each draw, shaped (chains, draws),
+    where the sampler recorded it (NUTS's ``sample_stats.lp``); it spares evaluating the
+    model at the bridge draws, half of the work.
     """
     model_kwargs = model_kwargs or {}
     t0 = time.perf_counter()
@@ -107,38 +140,29 @@ def bridge_sampling_log_z(
     chains, n_draws = next(iter(draws.values())).shape[:2]
     if n_draws < 20:
         raise ValueError(f"bridge sampling needs >= 20 draws per chain, got {n_draws}")
+    half = n_draws // 2
+    n1 = chains * (n_draws - half)
+    n2 = int(num_proposal or n1)
     flat_draws = {k: jnp.asarray(v.reshape(chains * n_draws, *v.shape[2:]))
                   for k, v in draws.items()}
-    # jitted: run eagerly, the model's every operation is dispatched (and its loops
-    # compiled) one by one, 10-15 s for the adhesive laws against ~1 s compiled
-    u = jax.jit(jax.vmap(lambda p: unconstrain_fn(model, (), model_kwargs, p)))(flat_draws)
-    one = jax.tree_util.tree_map(lambda a: a[0], u)
-    _, unravel = jax.flatten_util.ravel_pytree(one)
-    flat = np.asarray(jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u))
-    dim = flat.shape[1]
-    flat = flat.reshape(chains, n_draws, dim)
-    half = n_draws // 2
-    fit = flat[:, :half].reshape(-1, dim)
-    bridge = flat[:, half:].reshape(-1, dim)  # chain-major: (chains, n_draws - half)
-    mean = fit.mean(axis=0)
-    cov = np.atleast_2d(np.cov(fit, rowvar=False)) + 1e-12 * np.eye(dim)
-    chol = np.linalg.cholesky(cov)
-    n1 = bridge.shape[0]
-    n2 = int(num_proposal or n1)
-    z = np.asarray(jax.random.normal(jax.random.PRNGKey(seed), (n2, dim)))
-    prop = mean + z @ chol.T
-
+    known = log_density is not None
+    # one compiled program (one trace of the model): eagerly, the model's every operation
+    # is dispatched (and its loops compiled) one by one, 10-15 s for the adhesive laws
+    program = _program(model, model_kwargs, chains, half, n2, known)
+    mean, chol, bridge, prop, lq_bridge, lq_prop = (
+        None if a is None else np.asarray(a)
+        for a in program(flat_draws, jax.random.PRNGKey(seed)))
+    dim = mean.size
     log_det = float(np.sum(np.log(np.diag(chol))))
 
     def log_g(x: np.ndarray) -> np.ndarray:
         w = np.linalg.solve(chol, (x - mean).T)
         return -0.5 * np.sum(w * w, axis=0) - log_det - 0.5 * dim * np.log(2 * np.pi)
 
-    log_q = jax.jit(jax.vmap(lambda x: -potential_energy(model, (), model_kwargs,
-                                                         unravel(x))))
-    l1 = np.asarray(log_q(jnp.asarray(bridge))) - log_g(bridge)
-    l2 = np.asarray(log_q(jnp.asarray(prop))) - log_g(prop)
-    # a proposal draw outside the support (or a numerically zero density) has q = 0
+    if known:
+        lq_bridge = np.asarray(log_density, dtype=float)[:, half:].reshape(-1)
+    l1 = np.asarray(lq_bridge) - log_g(bridge)
+    l2 = np.asarray(lq_prop) - log_g(prop)
     l2 = np.where(np.isfinite(l2), l2, -np.inf)
     if not np.all(np.isfinite(l1)):
         raise RuntimeError("non-finite log density at a posterior draw: cannot bridge")

@@ -58,33 +58,47 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
     flat = {k: jnp.asarray(np.reshape(np.asarray(samples[k]), (n, *np.shape(samples[k])[2:])))
             for k in latents}
 
-    def post_one(args):
+    with_prior = predictive and prior_draws > 0
+    n_all, batch = n, min(BATCH, n)
+    if with_prior:
+        # whole batches only: a remainder would be a second copy of the model's program;
+        # the spare prior draws are made and dropped
+        batch = min(BATCH, n + prior_draws)
+        n_all = -(-(n + prior_draws) // batch) * batch
+
+    def latents_one(key):
+        tr = _trace(model, pdata, None, key)
+        return {k: tr[k]["value"] for k in latents}
+
+    def one(args):
         values, key = args
         tr = _trace(model, data, values, None)
         out = {f"ll:{k}": tr[k]["fn"].log_prob(tr[k]["value"])
                for k in OBSERVED_SITES if k in tr}
         if predictive:
             sim = _trace(model, pdata, values, key)
-            out.update({f"pp:{k}": sim[k]["value"] for k in OBSERVED_SITES if k in sim})
+            out.update({f"pp:{k}": s["value"] for k, s in sim.items() if _kept(k, s)})
         return out
-
-    def prior_one(key):
-        tr = _trace(model, pdata, None, key)
-        return {k: s["value"] for k, s in tr.items()
-                if s["type"] == "deterministic"
-                or (s["type"] == "sample" and (k in OBSERVED_SITES or not s["is_observed"]))}
 
     @jax.jit
     def program(flat, k_post, k_prior):
+        # the prior's draws go through the posterior's function (its predictive trace, given
+        # latents drawn from the prior, is the prior trace): one copy of the model's
+        # predictive in the program, not two (the draws program compiled in 2.8 s for Hertz
+        # against 6.7 s with a map of its own for the prior)
         keys = jax.random.split(k_post, n)
-        post = jax.lax.map(post_one, (flat, keys), batch_size=min(BATCH, n))
-        if not predictive or prior_draws <= 0:
-            return post, {}
-        prior = jax.lax.map(prior_one, jax.random.split(k_prior, prior_draws),
-                            batch_size=min(BATCH, prior_draws))
-        return post, prior
+        if with_prior:
+            k_lat, k_prior = jax.random.split(k_prior)
+            extra = jax.vmap(latents_one)(jax.random.split(k_lat, n_all - n))
+            flat = {k: jnp.concatenate([flat[k], extra[k]]) for k in latents}
+            keys = jnp.concatenate([keys, jax.random.split(k_prior, n_all - n)])
+        return jax.lax.map(one, (flat, keys), batch_size=batch)
 
-    post, prior = jax.device_get(program(flat, key_post, key_prior))
+    res = jax.device_get(program(flat, key_post, key_prior))
+    post = {k: v[:n] for k, v in res.items()
+            if k.startswith("ll:") or k.split(":", 1)[1] in OBSERVED_SITES}
+    prior = {k.split(":", 1)[1]: v[n:n + prior_draws] for k, v in res.items()
+             if k.startswith("pp:")} if with_prior else {}
     groups: dict[str, dict[str, np.ndarray]] = {"log_likelihood": {},
                                                 "posterior_predictive": {},
                                                 "prior": {}, "prior_predictive": {}}
@@ -96,6 +110,13 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
         group = "prior_predictive" if k in OBSERVED_SITES else "prior"
         groups[group][k] = np.asarray(v)[None]
     return groups
+
+
+def _kept(name: str, site: dict[str, Any]) -> bool:
+    # what a predictive trace returns: the observations, and (for the prior's draws) the
+    # latents and deterministic sites; not a factor (an observed site to numpyro)
+    return (site["type"] == "deterministic"
+            or (site["type"] == "sample" and (name in OBSERVED_SITES or not site["is_observed"])))
 
 
 # numpyro's names -> arviz's; lp is minus the potential energy, tree_depth from n_steps

@@ -232,6 +232,24 @@ def test_overlap_from_frequency():
     assert all(bool(jnp.isfinite(g)) for g in jax.grad(from_f, argnums=(0, 1))(4000.0, 25e-9))
 
 
+def test_newton_solves_converge_across_the_whole_table():
+    """The f0 and load inversions iterate to convergence (not a fixed count): over sigma
+    from 0.3 nm to 3 um (reduced overlaps D0 from the contact edge region to ~180), in
+    one batch, each recovers its overlap to 1e-12."""
+    mass = F0 / 9.81
+    sig = jnp.geomspace(3e-10, 3e-6, 60)
+    d0 = gw.static_overlap(F0, e_star=E_STAR, radius=R, sigma=sig)
+    np.testing.assert_allclose(np.asarray(gw.force(d0, e_star=E_STAR, radius=R, sigma=sig)),
+                               F0, rtol=1e-12)
+    assert float(jnp.min(d0 / sig)) < -1.0 and float(jnp.max(d0 / sig)) > 100.0
+    k0 = gw.stiffness(d0, e_star=E_STAR, radius=R, sigma=sig)
+    f0 = jnp.sqrt(k0 / mass) / (2 * jnp.pi)
+    back = jax.jit(lambda f, s: gw.overlap_from_frequency(f, F0, mass, sigma=s))(f0, sig)
+    np.testing.assert_allclose(np.asarray(back - d0) / np.asarray(sig), 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.asarray(back), np.asarray(d0), rtol=1e-12,
+                               atol=1e-12 * float(jnp.max(sig)))
+
+
 def test_finite_gradients_over_the_prior_region():
     """sigma in [1, 200] nm, E in [150, 250] GPa, delta from below the edge to 3 delta0."""
     sig = jnp.geomspace(1e-9, 200e-9, 9)
