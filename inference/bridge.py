@@ -10,7 +10,7 @@ Z = integral q(u) du:
 1. Split each chain's draws in halves. The first halves fit the proposal
    g = Normal(mean, cov) (sample moments); the second halves (N1 draws) enter the bridge,
    so proposal and bridge draws are independent (Overstall & Forster 2010).
-2. Draw N2 = N1 points from g. With l1 = log q - log g at the N1 posterior draws and
+2. Draw N2 = N1 points from g (in the same compiled program as the transforms). With l1 = log q - log g at the N1 posterior draws and
    l2 the same at the N2 proposal draws, s1 = N1/(N1+N2), s2 = N2/(N1+N2), iterate the
    optimal bridge (Meng & Wong 1996, Eq. 4.1), in log space::
 
@@ -27,6 +27,10 @@ Z = integral q(u) du:
    the ESS (ArviZ, over the chains) accounting for the autocorrelation of the NUTS
    draws; the log Z error is RE (a relative error of Z). Validated on the
    linear-Gaussian toy with an analytic evidence (tests/test_evidence.py).
+
+log q at the bridge draws is what NUTS recorded as minus the potential energy of each
+draw (``sample_stats.lp``) when the caller passes it, so the model is evaluated only at
+the proposal draws.
 
 The estimate is only as good as the draws: a run that failed its diagnostics gate gives
 an untrustworthy bridge estimate, and the comparison table marks it so. The normal

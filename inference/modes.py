@@ -33,7 +33,7 @@ import jax
 import jax.flatten_util
 import jax.numpy as jnp
 import numpy as np
-from numpyro.infer import Predictive
+from numpyro import handlers
 from numpyro.infer.util import potential_energy, unconstrain_fn
 
 from .evidence import latent_site_names
@@ -100,24 +100,26 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
     """
     kw = {"data": data}
     latents = latent_site_names(model, kw)
-    draws = Predictive(model, num_samples=starts, return_sites=latents)(
-        jax.random.PRNGKey(seed), data)
-    draws = {k: draws[k] for k in latents}
-    # the unconstrained layout, from an abstract evaluation (eagerly the model is slow)
-    shapes = jax.eval_shape(lambda p: unconstrain_fn(model, (), kw, p),
-                            jax.tree_util.tree_map(lambda a: a[0], draws))
-    _, unravel = jax.flatten_util.ravel_pytree(
-        jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes))
+    layout: list[Callable] = []  # the unravel of the unconstrained layout, set while tracing
 
     def pot(x):
-        return potential_energy(model, (), kw, unravel(x))
+        return potential_energy(model, (), kw, layout[0](x))
+
+    def prior_draw(key):
+        tr = handlers.trace(handlers.seed(model, key)).get_trace(**kw)
+        return {k: tr[k]["value"] for k in latents}
 
     t = jnp.linspace(0.0, 1.0, _SEGMENT + 2)[1:-1]
 
     @jax.jit
-    def run(draws):
-        # prior draws -> unconstrained, spread about their median (in the one program)
+    def run(key):
+        # prior draws -> unconstrained, spread about their median: all in the one program,
+        # which traces the model five times instead of the eight it took with the draws
+        # (Predictive), the layout (eval_shape) and the two density calls apart
+        draws = jax.vmap(prior_draw)(jax.random.split(key, starts))
         u = jax.vmap(lambda p: unconstrain_fn(model, (), kw, p))(draws)
+        layout.append(jax.flatten_util.ravel_pytree(jax.tree_util.tree_map(
+            lambda a: a[0], u))[1])
         x0 = jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u)
         centre = jnp.median(x0, axis=0)
         x0 = centre + spread * (x0 - centre)
@@ -126,10 +128,12 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
         # program (one compilation): segments of one basin stay near its floor
         seg = xs[None, :, None, :] + t[None, None, :, None] * (xs[:, None, None, :]
                                                                - xs[None, :, None, :])
-        ridge = jax.vmap(pot)(seg.reshape(-1, seg.shape[-1])).reshape(seg.shape[:3])
-        return xs, jax.vmap(pot)(xs), jnp.max(ridge, axis=-1)
+        pts = jnp.concatenate([xs, seg.reshape(-1, seg.shape[-1])])
+        pe_all = jax.vmap(pot)(pts)
+        return xs, pe_all[:starts], jnp.max(pe_all[starts:].reshape(seg.shape[:3]), axis=-1)
 
-    xs, pe, ridge = (np.asarray(a) for a in run(draws))
+    xs, pe, ridge = (np.asarray(a) for a in run(jax.random.PRNGKey(seed)))
+    unravel = layout[-1]
     ok = np.isfinite(pe)
     if not ok.any():
         raise RuntimeError(f"mode search: none of {starts} starts reached a finite "
