@@ -10,9 +10,10 @@ Z = integral q(u) du:
 1. Split each chain's draws in halves. The first halves fit the proposal
    g = Normal(mean, cov) (sample moments); the second halves (N1 draws) enter the bridge,
    so proposal and bridge draws are independent (Overstall & Forster 2010).
-2. Draw N2 = N1 points from g (in the same compiled program as the transforms). With l1 = log q - log g at the N1 posterior draws and
-   l2 the same at the N2 proposal draws, s1 = N1/(N1+N2), s2 = N2/(N1+N2), iterate the
-   optimal bridge (Meng & Wong 1996, Eq. 4.1), in log space::
+2. Draw N2 = N1 points from g (in the same compiled program as the transforms). With
+   l1 = log q - log g at the N1 posterior draws and l2 the same at the N2 proposal
+   draws, s1 = N1/(N1+N2), s2 = N2/(N1+N2), iterate the optimal bridge (Meng & Wong
+   1996, Eq. 4.1), in log space::
 
        r <- [ (1/N2) sum_j e^l2_j / (s1 e^l2_j + s2 r) ] / [ (1/N1) sum_i 1/(s1 e^l1_i + s2 r) ]
 

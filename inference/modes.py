@@ -19,8 +19,10 @@ so a caller can say when a second mode comes close (its mass is then missing fro
 evidence of a one-mode sampler).
 
 Cost: ``starts x steps`` gradient evaluations, vectorised, in one program whose tracing
-and compilation dominate: on the 2-core machine 1-2 s per law with a warm compilation
-cache (the rough sphere 11 s), 3-8 s cold (the rough sphere 23 s).
+and compilation dominate: on the 2-core machine 1-4 s per law with a warm compilation
+cache (the rough sphere ~5 s alone, ~10 s beside another fit), 3-8 s cold (the rough
+sphere ~16 s). The prior draws, the unconstrained layout and both density evaluations are
+inside that program: each apart traced the model again.
 """
 
 from __future__ import annotations
