@@ -3,11 +3,11 @@
 core).
 
 For every contact law of the registry that the inference supports (``models.registry``
-laws that ``inference.numpyro_models`` builds and ``beadrod compare`` fits: hertz,
-powerlaw, viscoelastic, jkr) one dataset is simulated from that law, with the exact
-ModelSpec the comparison pipeline fits (``workflows.pipeline.comparison_specs`` at the
-default rung of ``workflows.config.DEFAULTS``: the exact backbone for the F ~ delta^n
-laws, first order for JKR, which has no backbone). Then
+laws that ``inference.numpyro_models`` builds and ``beadrod compare`` fits, and that
+have a truth below: hertz, powerlaw, viscoelastic, jkr, dmt; the rough sphere has none
+yet) one dataset is simulated from that law, with the exact ModelSpec the comparison
+pipeline fits (``workflows.pipeline.comparison_specs`` at the default rung of
+``workflows.config.DEFAULTS``, the exact backbone for every law). Then
 
 * the generating law is fitted by NUTS (2 chains x (500 warmup + 1000 draws), fixed
   seeds), must pass the diagnostics gate, and its central 90 % intervals must cover the
@@ -159,7 +159,7 @@ def test_every_supported_law_has_a_truth():
     import jax
     from numpyro import handlers
 
-    assert set(LAWS) == {"hertz", "powerlaw", "viscoelastic", "jkr"}
+    assert set(LAWS) == {"hertz", "powerlaw", "viscoelastic", "jkr", "dmt"}
     assert set(TRUTHS) == set(LAWS) == set(DATA_SEEDS)
     des = design_inputs(SCENE, n_protocols=2, amplitudes=AMPLITUDES[:2])
     for law in LAWS:
