@@ -47,13 +47,13 @@ from typing import Any
 
 import arviz as az
 import jax
-import jax.flatten_util
 import jax.numpy as jnp
 import numpy as np
-from numpyro.infer.util import potential_energy, unconstrain_fn
+from numpyro.infer.util import potential_energy
 from scipy.special import logsumexp
 
 from .evidence import EvidenceResult, latent_site_names
+from .unconstrained import flatten_unconstrained
 
 __all__ = ["bridge_sampling_log_z"]
 
@@ -100,9 +100,7 @@ def _program(model: Callable, model_kwargs: dict, chains: int, half: int, n2: in
 
     @jax.jit
     def program(flat_draws, key):
-        u = jax.vmap(lambda p: unconstrain_fn(model, (), model_kwargs, p))(flat_draws)
-        _, unravel = jax.flatten_util.ravel_pytree(jax.tree_util.tree_map(lambda a: a[0], u))
-        flat = jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u)
+        flat, unravel = flatten_unconstrained(model, model_kwargs, flat_draws)
         flat = flat.reshape(chains, -1, flat.shape[-1])
         fit = flat[:, :half].reshape(-1, flat.shape[-1])
         bridge = flat[:, half:].reshape(-1, flat.shape[-1])

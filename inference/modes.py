@@ -32,13 +32,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import jax
-import jax.flatten_util
 import jax.numpy as jnp
 import numpy as np
 from numpyro import handlers
-from numpyro.infer.util import potential_energy, unconstrain_fn
+from numpyro.infer.util import potential_energy
 
 from .evidence import latent_site_names
+from .unconstrained import flatten_unconstrained
 
 __all__ = ["ModeSearch", "find_modes"]
 
@@ -119,10 +119,8 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
         # which traces the model five times instead of the eight it took with the draws
         # (Predictive), the layout (eval_shape) and the two density calls apart
         draws = jax.vmap(prior_draw)(jax.random.split(key, starts))
-        u = jax.vmap(lambda p: unconstrain_fn(model, (), kw, p))(draws)
-        layout.append(jax.flatten_util.ravel_pytree(jax.tree_util.tree_map(
-            lambda a: a[0], u))[1])
-        x0 = jax.vmap(lambda t: jax.flatten_util.ravel_pytree(t)[0])(u)
+        x0, unravel = flatten_unconstrained(model, kw, draws)
+        layout.append(unravel)
         centre = jnp.median(x0, axis=0)
         x0 = centre + spread * (x0 - centre)
         xs = jax.vmap(lambda x: _adam(jax.grad(pot), x, steps, lr))(x0)

@@ -233,17 +233,18 @@ def run(out_dir: Path, quick: bool = False) -> Path:
         ns = br = None
         if name != "hertz_first_order":
             ns = ns_all[name]
-            br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior)
+            br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior,
+                                       log_density=fit.idata.sample_stats["lp"])
             t_bridge += br.wall_s
         grad_s = gradient_cost(model, inputs)
-        grads = float(np.sum(np.asarray(fit.idata.sample_stats["n_steps"])))
+        steps = np.asarray(fit.idata.sample_stats["n_steps"])
+        grads = float(np.sum(steps))
         rows.append({"model": name, "rung": spec.rung, "compile_s": compile_s,
                      "mode_search_s": fit.timings.get("mode_search_s"),
                      "sampling_s": sampling, "min_bulk_ess": ess, "ess_per_s": ess / sampling,
                      "ess_per_s_incl_compile": ess / fit.timings["nuts_s"],
                      "us_per_gradient": 1e6 * grad_s,
-                     "gradients_per_draw": grads / np.asarray(
-                         fit.idata.sample_stats["n_steps"]).size,
+                     "gradients_per_draw": grads / steps.size,
                      "ess_per_gradient_s": ess / (grads * grad_s),
                      "log_z_ns": ns.log_z if ns else None, "err_ns": ns.log_z_err if ns else None,
                      "ns_s": ns.wall_s if ns else None,
