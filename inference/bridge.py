@@ -127,7 +127,9 @@ def bridge_sampling_log_z(
     """log Z of ``model(**model_kwargs)`` from its posterior draws by bridge sampling.
 
     ``posterior`` maps every latent site to its constrained draws shaped (chains, draws,
-    ...) (``idata.posterior`` works, or ``mcmc.get_samples(group_by_chain=True)``).
+    ...) (``idata.posterior`` works, or ``mcmc.get_samples(group_by_chain=True)``); or it
+    is the whole InferenceData of a NUTS run, whose recorded ``sample_stats.lp`` then
+    serves as ``log_density`` unless one is given.
     ``num_proposal`` defaults to the number of bridge draws (half of all draws).
     ``log_density``: log q(u) = -potential_energy at each draw, shaped (chains, draws),
     where the sampler recorded it (NUTS's ``sample_stats.lp``); it spares evaluating the
@@ -135,6 +137,11 @@ def bridge_sampling_log_z(
     """
     model_kwargs = model_kwargs or {}
     t0 = time.perf_counter()
+    if hasattr(posterior, "posterior"):  # an InferenceData
+        stats = getattr(posterior, "sample_stats", None)
+        if log_density is None and stats is not None and "lp" in stats:
+            log_density = stats["lp"]
+        posterior = posterior.posterior
     latents = latent_site_names(model, model_kwargs)
     missing = [k for k in latents if k not in posterior]
     if missing:

@@ -10,13 +10,47 @@ worker is read by the others.
 A cache the caller names in BEADROD_JAX_CACHE (a path, or "" for none) is respected.
 """
 
+import gc
 import os
 import tempfile
 
 import jax
+import pytest
 
 jax.config.update("jax_enable_x64", True)
 
 if "BEADROD_JAX_CACHE" not in os.environ:
     os.environ["BEADROD_JAX_CACHE"] = os.path.join(tempfile.gettempdir(),
                                                    f"beadrod-test-jax-pid{os.getpid()}")
+
+
+# Each compiled XLA:CPU program holds a few memory mappings until JAX drops it, and a long
+# test worker compiles thousands of programs (every test builds fresh closures). Linux
+# caps a process at vm.max_map_count mappings (65,530 by default); past it, LLVM's and
+# the cache deserializer's mmap calls fail and the worker dies with a segfault or an
+# abort, far from the test that used up the maps. Dropping JAX's caches once the count
+# passes a quarter of that cap releases them (measured: 1,400 -> 510 maps after 300
+# programs); it costs a recompile, or a persistent-cache read, of what the next test uses.
+def _map_count() -> int:
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            return sum(1 for _ in maps)
+    except OSError:  # not Linux: no such cap to guard
+        return 0
+
+
+_MAP_GUARD = 16_000
+
+
+@pytest.fixture(autouse=True)
+def _release_compiled_programs(request):
+    yield
+    before = after = _map_count()
+    if before > _MAP_GUARD:
+        jax.clear_caches()
+        gc.collect()
+        after = _map_count()
+    log = os.environ.get("BEADROD_TEST_MAPLOG")  # to watch the guard work
+    if log:
+        with open(log, "a") as out:
+            out.write(f"{os.getpid()} {request.node.nodeid} {before} {after}\n")

@@ -148,6 +148,16 @@ def test_bridge_sampling_takes_the_samplers_log_density():
     a = bridge_sampling_log_z(scale_model, kw, draws, seed=2)
     b = bridge_sampling_log_z(scale_model, kw, draws, seed=2, log_density=lp)
     assert abs(a.log_z - b.log_z) < 1e-9 and abs(a.log_z_err - b.log_z_err) < 1e-9
+    # an InferenceData carries its own log density (sample_stats.lp), as run_nuts records
+    import arviz as az
+    idata = az.from_dict(posterior={k: np.asarray(v) for k, v in draws.items()},
+                         sample_stats={"lp": lp})
+    c = bridge_sampling_log_z(scale_model, kw, idata, seed=2)
+    assert abs(c.log_z - b.log_z) < 1e-9 and abs(c.log_z_err - b.log_z_err) < 1e-9
+    bad = az.from_dict(posterior={k: np.asarray(v) for k, v in draws.items()},
+                       sample_stats={"lp": np.full_like(lp, np.nan)})
+    with pytest.raises(RuntimeError, match="non-finite"):
+        bridge_sampling_log_z(scale_model, kw, bad)
     with pytest.raises(RuntimeError, match="non-finite"):
         bridge_sampling_log_z(scale_model, kw, draws, log_density=np.full_like(lp, np.nan))
 

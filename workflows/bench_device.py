@@ -83,8 +83,7 @@ def _nuts_rows(names: list[str], inputs: dict, chains: int, warm: int, draws: in
     for name, spec in comparison_specs(names, "backbone", "normal").items():
         model = build_model(spec)
         fit, compile_s, sampling, ess = timed_nuts(model, inputs, chains, warm, draws, method)
-        br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior,
-                                   log_density=fit.idata.sample_stats["lp"])
+        br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata)
         rows.append({"task": f"NUTS {name} ({spec.rung}), {chains} chains {method}",
                      "compile_s": compile_s, "run_s": sampling,
                      "per_unit_s": sampling / ess, "rate": ess / sampling,

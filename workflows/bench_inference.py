@@ -233,8 +233,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
         ns = br = None
         if name != "hertz_first_order":
             ns = ns_all[name]
-            br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior,
-                                       log_density=fit.idata.sample_stats["lp"])
+            br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata)
             t_bridge += br.wall_s
         grad_s = gradient_cost(model, inputs)
         steps = np.asarray(fit.idata.sample_stats["n_steps"])

@@ -318,9 +318,8 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
                                             seed=cfg["seed"])
             elif method == "bridge":
                 begin(log, job, "%s: evidence by bridge sampling from the NUTS draws", name)
-                est = bridge_sampling_log_z(model, {"data": inputs}, fit.idata.posterior,
-                                            seed=cfg["seed"],
-                                            log_density=fit.idata.sample_stats["lp"])
+                est = bridge_sampling_log_z(model, {"data": inputs}, fit.idata,
+                                            seed=cfg["seed"])
             else:
                 begin(log, job, "%s: evidence by tempered SMC (%d particles x %d seeds)", name,
                       ev_cfg["smc_particles"], ev_cfg["smc_seeds"])
