@@ -523,7 +523,7 @@ def test_code_digest_follows_the_code(tmp_path):
 
 def test_persistent_cache_is_locked_against_concurrent_writers(tmp_path):
     """Without a size limit JAX reads and writes its cache files unlocked, and one process
-    can read an executable another is still writing (a segfault on deserialising it).
+    can read an executable another is still writing (JAX then warns and recompiles).
     The entry points set a limit, so JAX takes its file lock: the lock file appears next
     to the first entry."""
     code = ("from workflows.runtime import enable_x64, CACHE_MAX_BYTES\n"

@@ -64,11 +64,11 @@ def enable_x64() -> None:
         # hundreds of small ones (measured: the rough-sphere fit 1:50 -> 1:35 warm)
         os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
         # A size limit is what makes JAX lock the directory (jax._src.lru_cache): without
-        # one, a process can read an entry that another is still writing, a truncated
-        # executable whose deserialisation segfaults (measured: 175 of 200 reads of 8 MB
-        # entries truncated without the lock, none with it). compare's worker
-        # processes, two beadrod runs and test workers share the directory. Least
-        # recently used entries go beyond the limit.
+        # one, a process can read an entry that another is still writing (measured: 175
+        # of 200 reads of 8 MB entries came back truncated without the lock, none with
+        # it). JAX then warns and compiles again. compare's worker processes, two
+        # beadrod runs and test workers share the directory. Least recently used
+        # entries go beyond the limit.
         os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(CACHE_MAX_BYTES))
     if "jax" in sys.modules:  # imported already (a test, an embedding program)
         import jax
