@@ -10,7 +10,6 @@ from __future__ import annotations
 import ast
 import json
 import logging
-import os
 import re
 import subprocess
 import sys
@@ -519,23 +518,3 @@ def test_code_digest_follows_the_code(tmp_path):
     law_file.write_text("NAME = 'b'\n")
     code_digest.cache_clear()  # a new process: the digest is cached per run
     assert code_digest((str(law_file),)) != d0
-
-
-def test_persistent_cache_is_locked_against_concurrent_writers(tmp_path):
-    """Without a size limit JAX reads and writes its cache files unlocked, and one process
-    can read an executable another is still writing (JAX then warns and recompiles).
-    The entry points set a limit, so JAX takes its file lock: the lock file appears next
-    to the first entry."""
-    code = ("from workflows.runtime import enable_x64, CACHE_MAX_BYTES\n"
-            "enable_x64()\n"
-            "import jax, jax.numpy as jnp\n"
-            "assert jax.config.jax_compilation_cache_max_size == CACHE_MAX_BYTES > 0\n"
-            "jax.jit(lambda x: jnp.sin(x) * 3.0)(jnp.ones(3)).block_until_ready()\n")
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("JAX_COMPILATION_CACHE", "JAX_PERSISTENT_CACHE"))}
-    env["BEADROD_JAX_CACHE"] = str(tmp_path / "cache")
-    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         timeout=300, cwd=ROOT)
-    assert run.returncode == 0, run.stderr
-    files = {p.name for p in (tmp_path / "cache").iterdir()}
-    assert ".lockfile" in files and any(f.endswith("-cache") for f in files), files

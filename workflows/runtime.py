@@ -20,9 +20,9 @@ import warnings
 from pathlib import Path
 from typing import Any, Protocol
 
-__all__ = ["UserError", "LOGGER", "host_devices", "enable_x64", "CACHE_MAX_BYTES",
-           "quiet_libraries", "setup_logging", "log_to_queue", "console_handler",
-           "log_to_file", "init_worker", "Display"]
+__all__ = ["UserError", "LOGGER", "host_devices", "enable_x64", "quiet_libraries",
+           "setup_logging", "log_to_queue", "console_handler", "log_to_file", "init_worker",
+           "Display"]
 
 LOGGER = "beadrod"
 LOG_FILE = "beadrod.log"
@@ -44,11 +44,6 @@ def host_devices(n: int) -> None:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={int(n)}"
 
 
-CACHE_MAX_BYTES = 8 << 30
-"""Size limit of the persistent compilation cache [bytes] (8 GiB; a cold default compare
-writes about 0.5 GiB). Positive, so that JAX locks the directory against concurrent writers."""
-
-
 def enable_x64() -> None:
     """Float64 everywhere, and the persistent compilation cache.
 
@@ -63,13 +58,6 @@ def enable_x64() -> None:
         # every program, however quick to compile: a warm run otherwise recompiles some
         # hundreds of small ones (measured: the rough-sphere fit 1:50 -> 1:35 warm)
         os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
-        # A size limit is what makes JAX lock the directory (jax._src.lru_cache): without
-        # one, a process can read an entry that another is still writing (measured: 175
-        # of 200 reads of 8 MB entries came back truncated without the lock, none with
-        # it). JAX then warns and compiles again. compare's worker processes, two
-        # beadrod runs and test workers share the directory. Least recently used
-        # entries go beyond the limit.
-        os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(CACHE_MAX_BYTES))
     if "jax" in sys.modules:  # imported already (a test, an embedding program)
         import jax
 
@@ -79,8 +67,6 @@ def enable_x64() -> None:
                               os.environ["JAX_COMPILATION_CACHE_DIR"])
             jax.config.update("jax_persistent_cache_min_compile_time_secs",
                               float(os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"]))
-            jax.config.update("jax_compilation_cache_max_size",
-                              int(os.environ["JAX_COMPILATION_CACHE_MAX_SIZE"]))
 
 
 _SEEN: set[str] = set()
