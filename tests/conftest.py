@@ -26,11 +26,11 @@ if "BEADROD_JAX_CACHE" not in os.environ:
 
 # Each compiled XLA:CPU program holds a few memory mappings until JAX drops it, and a long
 # test worker compiles thousands of programs (every test builds fresh closures). Linux
-# caps a process at vm.max_map_count mappings (65,530 by default); past it, LLVM's and
-# the cache deserializer's mmap calls fail and the worker dies with a segfault or an
-# abort, far from the test that used up the maps. Dropping JAX's caches once the count
-# passes a quarter of that cap releases them (measured: 1,400 -> 510 maps after 300
-# programs); it costs a recompile, or a persistent-cache read, of what the next test uses.
+# caps a process at vm.max_map_count mappings (65,530 by default), and past it every mmap
+# fails, LLVM's JIT and the cache deserializer's included; slow-suite workers reached
+# 37,000 within one test. Dropping JAX's caches once the count passes 16,000 releases
+# them (measured: 1,400 -> 510 maps after 300 programs; 37,120 -> 1,584 in the suite);
+# it costs a recompile, or a persistent-cache read, of what the next test uses.
 def _map_count() -> int:
     try:
         with open("/proc/self/maps", "rb") as maps:
