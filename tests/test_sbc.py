@@ -67,41 +67,26 @@ def test_dkw_band_matches_massart_bound_and_covers_uniform_ranks():
     assert np.max(diff["a"]) > eps
 
 
-# The full SBC runs in a Python process of its own. In three slow-suite runs out of
-# three XLA crashed (segfault or abort in deserialize_executable, at the first replicate)
-# when it ran late in a long pytest worker; run alone it passed against the same cache.
-# The cause is not established (README); a fresh process does not carry the history.
-_SBC_FULL = """
-import json, sys
-import jax
-jax.config.update("jax_enable_x64", True)
-import numpy as np
-from inference.likelihood import design_inputs
-from inference.numpyro_models import ModelSpec
-from inference.sbc import run_sbc
-from models.scenes import builtin_scene
-des = design_inputs(builtin_scene("paper"), n_protocols=4,
-                    amplitudes=np.linspace(8e-9, 40e-9, 4))
-res = run_sbc(ModelSpec("viscoelastic", rung="paper_eq25"), des, n_replicates=100,
-              num_warmup=300, num_samples=100, thin=3, seed=1,
-              params=("eta", "young", "delta0_scatter", "sigma_shift"))
-json.dump({"ranks": {k: v.tolist() for k, v in res.ranks.items()}, "n_draws": res.n_draws,
-           "pvalues": res.pvalues, "wall_s": res.wall_s,
-           "divergences": res.divergences.tolist()}, sys.stdout)
-"""
+def _full_sbc(n_replicates: int = 100) -> SBCResult:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)  # a fresh process: conftest did not run
+    des = design_inputs(SCENE, n_protocols=4, amplitudes=np.linspace(8e-9, 40e-9, 4))
+    return run_sbc(SPEC, des, n_replicates=n_replicates, num_warmup=300, num_samples=100,
+                   thin=3, seed=1, params=("eta", "young", "delta0_scatter", "sigma_shift"))
 
 
 @pytest.mark.slow
 def test_sbc_full_viscoelastic_ranks_uniform(tmp_path):
-    import subprocess
-    import sys
+    # The SBC runs in a Python process of its own. In three slow-suite runs out of three
+    # XLA crashed (segfault or abort in deserialize_executable, at the first replicate)
+    # when it ran late in a long pytest worker; run alone it passed against the same
+    # cache. The cause is not established (README); a fresh process lacks the history.
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
 
-    run = subprocess.run([sys.executable, "-c", _SBC_FULL], capture_output=True, text=True,
-                         timeout=3000, cwd=Path(__file__).parent.parent)
-    assert run.returncode == 0, run.stderr[-3000:]
-    out = json.loads(run.stdout)
-    res = SBCResult({k: np.asarray(v, int) for k, v in out["ranks"].items()}, out["n_draws"],
-                    out["pvalues"], out["wall_s"], np.asarray(out["divergences"], int))
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        res = pool.submit(_full_sbc).result(timeout=3000)
     out_dir = Path(os.environ.get("BEADROD_ARTIFACTS", tmp_path))
     plot_ecdf(res, out_dir / "sbc_viscoelastic.png")
     # 4 tests: Bonferroni at 1 %
