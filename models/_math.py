@@ -10,7 +10,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
-__all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu", "knot_cell"]
+__all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu", "knot_cell",
+           "materialize"]
 
 
 def safe_sqrt(x: ArrayLike) -> jnp.ndarray:
@@ -63,3 +64,17 @@ def knot_cell(knots: ArrayLike, z: ArrayLike, frac: ArrayLike) -> tuple[jnp.ndar
     i = jnp.where((z < knots[i]) & (i > 0), i - 1, i)
     i = jnp.where((z >= knots[jnp.minimum(i + 1, last + 1)]) & (i < last), i + 1, i)
     return i, z - knots[i]
+
+
+def materialize(index: ArrayLike) -> jnp.ndarray:
+    """``index`` (an integer array) unchanged, computed once before the gather that uses it.
+
+    Why: XLA fuses an index's elementwise producers into the gather that consumes it and
+    then recomputes them for every gathered element; a table lookup that gathers 4 x 24
+    coefficients per point repeated its whole cell search (and the Chebyshev basis the
+    search depends on) 96 times. A reduction is a fusion boundary XLA keeps (it removes
+    ``jax.lax.optimization_barrier`` on the CPU), so the index is summed with zeros along a
+    new axis of length 2.
+    """
+    index = jnp.asarray(index)
+    return jnp.sum(jnp.stack([index, jnp.zeros_like(index)]), axis=0, dtype=index.dtype)

@@ -162,7 +162,7 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
     """
     tab = load_table()
     x, n = jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float)
-    if n.ndim > 0:  # a scalar n stays scalar: see _spline_eval
+    if n.ndim > 0:  # a scalar n stays scalar: see surrogate._cell_eval
         x, n = jnp.broadcast_arrays(x, n)
     inside = surrogate.within_amplitude(x, X_MAX) & (n >= N_MIN - _N_TOL) & (n <= N_MAX + _N_TOL)
     s = surrogate.evaluate(tab, x, n, prefactor=lambda ns: ns - 1.0)

@@ -59,22 +59,23 @@ from __future__ import annotations
 
 import math
 import pathlib
-from functools import partial
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
-from . import hertz
+from . import hertz, inverse_spline
 from ._math import knot_cell, safe_pow
 from ._tables import rebuild_cli
 from .greenwood_tripp import MU_DEFAULT, SUMMIT_CUTOFF
+from .inverse_spline import solve_increasing
 
 __all__ = ["MU", "SUMMIT_CUTOFF", "APPROACH_MAX", "TABLE_PATH", "force_scale",
-           "reduced_hertz_approach", "reduced_force", "reduced_overlap", "effective_approach",
+           "reduced_hertz_approach", "reduced_force", "reduced_overlap", "solve_reduced_overlap",
+           "reduced_overlap_from_ratio", "solve_reduced_overlap_from_ratio", "effective_approach",
            "force", "stiffness", "static_overlap", "overlap_from_frequency", "contact_edge",
-           "roughness_parameter", "build_table", "load_table"]
+           "roughness_parameter", "build_table", "inverse_tables", "load_table"]
 
 MU = MU_DEFAULT
 """Johnson's mu = (8/3) eta sigma (2 R beta)^(1/2) of the stored table [-]."""
@@ -86,8 +87,8 @@ TABLE_PATH = pathlib.Path(__file__).with_name("data") / "gw_table.npz"
 
 _N_KNOTS = 401
 _Z_WIDTH = 2.0
-_NEWTON_STEPS = 40
-_NEWTON_TOL = 1e-15   # relative step (to 1 + |x|) below which Newton has converged
+_INVERSE_KNOTS = 1601
+_INVERSE_EDGE = 0.01   # lowest t = D + s_c of the inverse tables (below: power-law ends)
 _TABLE: dict[str, np.ndarray] | None = None
 
 
@@ -140,45 +141,77 @@ def _positive(x):
     return jnp.maximum(x, jnp.finfo(jnp.result_type(x)).tiny)
 
 
-@partial(jax.custom_jvp, nondiff_argnums=(0,))
-def _increasing_inverse(fun, target, start):
-    """x with fun(x) = target for fun increasing and convex on (-s_c, inf): Newton from
-    ``start``, never stepping more than halfway to the contact edge. Implicit-function
-    derivative (custom_jvp), not the iterations'."""
-    def body(state):
-        k, x, _ = state
-        val, der = _slope(fun, x)
-        new = jnp.maximum(x - (val - target) / _positive(der), 0.5 * (x - SUMMIT_CUTOFF))
-        return k + 1, new, jnp.max(jnp.abs(new - x) / (1.0 + jnp.abs(new)), initial=0.0)
-
-    def more(state):
-        k, _, change = state
-        return (k < _NEWTON_STEPS) & (change > _NEWTON_TOL)
-
-    # to convergence, not a fixed count: Newton (quadratic) needs at most 9 steps from
-    # these starts over D in [-5.9, 1e4], 4 for reduced_overlap; 40 fixed steps made the
-    # rough sphere's f0 inversion 80 % of its likelihood's cost
-    start = jnp.asarray(start, float)
-    return jax.lax.while_loop(more, body, (0, start, jnp.inf))[1]
+def _inverse_tables():
+    tab = load_table()
+    if "load_inverse.coef" not in tab:
+        raise RuntimeError(f"{TABLE_PATH} lacks its inverse tables: rebuild it "
+                           "(python -m models.greenwood_williamson --rebuild)")
+    return ({k.split(".", 1)[1]: v for k, v in tab.items() if k.startswith("load_inverse.")},
+            {k.split(".", 1)[1]: v for k, v in tab.items() if k.startswith("ratio_inverse.")})
 
 
-@_increasing_inverse.defjvp
-def _increasing_inverse_jvp(fun, primals, tangents):
-    target, start = primals
-    x = _increasing_inverse(fun, target, start)
-    der = _slope(fun, x)[1]
-    return x, tangents[0] / _positive(der)
-
-
-def reduced_overlap(hertz_approach: ArrayLike) -> jnp.ndarray:
-    """D0 = delta0/sigma [-] with e(D0) = E0, E0 = delta_H(F0)/sigma = 1/alpha [-] > 0.
+def solve_reduced_overlap(hertz_approach: ArrayLike) -> jnp.ndarray:
+    """D0 [-] with e(D0) = E0 = 1/alpha > 0 by Newton to convergence, implicit gradients
+    (the reference that :func:`reduced_overlap`'s table is built from and tested against).
 
     e is increasing and convex (checked on the table), so Newton converges from any start
     right of the root; the start 2 E0 - e(E0) is within O(o o') of it for large E0.
     """
     e0 = jnp.asarray(hertz_approach, float)
     start = jnp.maximum(2.0 * e0 - reduced_hertz_approach(e0), 0.5 - SUMMIT_CUTOFF)
-    return _increasing_inverse(reduced_hertz_approach, e0, jax.lax.stop_gradient(start))
+    return solve_increasing(reduced_hertz_approach, e0, jax.lax.stop_gradient(start),
+                            -SUMMIT_CUTOFF)
+
+
+def _hertz_ratio(approach):
+    # e/e' = (2/3) F/F' (F ~ e^(3/2)); increasing because f is log-concave (table check)
+    e, de = _slope(reduced_hertz_approach, approach)
+    return e / _positive(de)
+
+
+def solve_reduced_overlap_from_ratio(ratio: ArrayLike) -> jnp.ndarray:
+    """D0 [-] with e/e'(D0) = ratio > 0 by Newton to convergence, implicit gradients (the
+    reference of :func:`reduced_overlap_from_ratio`)."""
+    lam = jnp.asarray(ratio, float)
+    start = jax.lax.stop_gradient(jnp.maximum(lam, 0.5 - SUMMIT_CUTOFF))
+    return solve_increasing(_hertz_ratio, lam, start, -SUMMIT_CUTOFF)
+
+
+def _above_table(y, table, fixed_point):
+    # D > D_max: e = D - o (D/D_max)^p, a contraction in D (slope o p/D_max^p D^(p-1) ~
+    # 3e-4), so three fixed-point steps reach round-off; y is clamped to the table's top
+    # so the branch that where() discards stays finite
+    o, p = float(load_table()["offset_hi"]), float(load_table()["power_hi"])
+    yc = jnp.maximum(y, float(np.exp(table["s_range"][1])))
+    d = yc
+    for _ in range(3):
+        d = fixed_point(yc, d, o * (d / APPROACH_MAX) ** p, p)
+    return d
+
+
+def reduced_overlap(hertz_approach: ArrayLike) -> jnp.ndarray:
+    """D0 = delta0/sigma [-] with e(D0) = E0, E0 = delta_H(F0)/sigma = 1/alpha [-] > 0:
+    the tabulated inverse (``load_inverse`` in the table file: :func:`solve_reduced_overlap`
+    at 801 knots uniform in ln E0, quintic spline, within 1e-12 relative in D0 + s_c,
+    tests/test_greenwood_williamson.py); above D0 = D_max the asymptotic branch."""
+    e0 = jnp.asarray(hertz_approach, float)
+    table, _ = _inverse_tables()
+    top = float(np.exp(table["end_values"][1])) - SUMMIT_CUTOFF
+    d_tab = jnp.exp(inverse_spline.evaluate(table, jnp.log(_positive(e0)))) - SUMMIT_CUTOFF
+    d_hi = _above_table(e0, table, lambda y, d, off, p: y + off)
+    return jnp.where(d_tab > top, d_hi, d_tab)
+
+
+def reduced_overlap_from_ratio(ratio: ArrayLike) -> jnp.ndarray:
+    """D0 [-] with e/e'(D0) = ratio [-] > 0: the tabulated inverse (``ratio_inverse``,
+    built like :func:`reduced_overlap`'s from :func:`solve_reduced_overlap_from_ratio`);
+    above D_max the asymptotic branch, where e/e' = (D - o r)/(1 - o p r/D), r = (D/D_max)^p."""
+    lam = jnp.asarray(ratio, float)
+    _, table = _inverse_tables()
+    top = float(np.exp(table["end_values"][1])) - SUMMIT_CUTOFF
+    d_tab = jnp.exp(inverse_spline.evaluate(table, jnp.log(_positive(lam)))) - SUMMIT_CUTOFF
+    d_hi = _above_table(lam, table, lambda y, d, off, p: y * (1.0 - off * p / d) + off)
+    return jnp.where(d_tab > top, d_hi, d_tab)
 
 
 def _sigma_parts(sigma):
@@ -221,12 +254,6 @@ def static_overlap(load: ArrayLike, *, e_star: ArrayLike, radius: ArrayLike,
     return jnp.where(rough, s * reduced_overlap(dh / s), dh)
 
 
-def _hertz_ratio(approach):
-    # e/e' = (2/3) F/F' (F ~ e^(3/2)); increasing because f is log-concave (table check)
-    e, de = _slope(reduced_hertz_approach, approach)
-    return e / _positive(de)
-
-
 def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike, *,
                            sigma: ArrayLike) -> jnp.ndarray:
     """delta0 [m] that a measured linear resonance f0 [Hz] implies under load F0 [N] on a
@@ -235,9 +262,7 @@ def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike, *,
     Independent of E* and R, like Hertz's 3 F0/(2 m omega0^2) (its sigma -> 0 limit)."""
     ratio = load / (mass * jnp.square(2.0 * jnp.pi * jnp.asarray(f0, float)))
     rough, s = _sigma_parts(sigma)
-    lam = 1.5 * ratio / s
-    start = jax.lax.stop_gradient(jnp.maximum(lam, 0.5 - SUMMIT_CUTOFF))
-    d0 = _increasing_inverse(_hertz_ratio, lam, start)
+    d0 = reduced_overlap_from_ratio(1.5 * ratio / s)
     return jnp.where(rough, s * d0, 1.5 * ratio)
 
 
@@ -277,9 +302,35 @@ def build_table(mu: float = MU, n_rings: int = 200) -> dict[str, np.ndarray]:
     de_dd = e_hi * (7.0 / (3.0 * t[-1]) + 2.0 / 3.0 * spline(z[-1], nu=1)
                     / np.hypot(t[-1], _Z_WIDTH))
     offset = APPROACH_MAX - e_hi
-    return {"z_knots": z, "y_knots": y, "coef": coef, "offset_hi": np.asarray(offset),
-            "power_hi": np.asarray((1.0 - de_dd) * APPROACH_MAX / offset),
-            "mu": np.asarray(mu), "summit_cutoff": np.asarray(SUMMIT_CUTOFF)}
+    out = {"z_knots": z, "y_knots": y, "coef": coef, "offset_hi": np.asarray(offset),
+           "power_hi": np.asarray((1.0 - de_dd) * APPROACH_MAX / offset),
+           "mu": np.asarray(mu), "summit_cutoff": np.asarray(SUMMIT_CUTOFF)}
+    out.update(inverse_tables(out))
+    return out
+
+
+def inverse_tables(forward: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The tabulated inverses of the forward table ``forward`` (keys 'load_inverse.*' and
+    'ratio_inverse.*'): :func:`solve_reduced_overlap` and
+    :func:`solve_reduced_overlap_from_ratio` on knots uniform in ln E0 (ln ratio) from
+    t = D + s_c = 0.01 to D = D_max (:func:`models.inverse_spline.build`)."""
+    global _TABLE
+    saved, _TABLE = _TABLE, forward   # the solves read the module's table
+    try:
+        ends = jnp.asarray([_INVERSE_EDGE - SUMMIT_CUTOFF, APPROACH_MAX])
+        out = {}
+        for name, fun, solve in (("load_inverse", reduced_hertz_approach, solve_reduced_overlap),
+                                 ("ratio_inverse", _hertz_ratio,
+                                  solve_reduced_overlap_from_ratio)):
+            s_lo, s_hi = (float(v) for v in jnp.log(fun(ends)))
+            fast = jax.jit(solve)
+            tab = inverse_spline.build(
+                lambda s, f=fast: np.log(np.asarray(f(jnp.exp(jnp.asarray(s)))) + SUMMIT_CUTOFF),
+                s_lo, s_hi, _INVERSE_KNOTS)
+            out.update({f"{name}.{k}": v for k, v in tab.items()})
+        return out
+    finally:
+        _TABLE = saved
 
 
 MIN_REDUCED_OVERLAP = 3.0

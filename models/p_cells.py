@@ -1,0 +1,110 @@
+"""Evaluation of a backbone surrogate on cells in p: its Chebyshev interpolant resampled as
+cubic Hermite pieces, for tables whose shape parameter differs from point to point.
+
+Why. A surrogate (:mod:`models.surrogate`) is a cubic spline in the amplitude coordinate,
+tensor product with a Chebyshev interpolant in p of up to 24 terms. Where p is one number
+for all sweep points (Hertz, the power law) the Chebyshev sums are taken once per knot. A
+law whose p differs per protocol (the rough sphere's D0' = delta0'/sigma) needs them per
+point: each point then gathers 4 x 24 coefficients for its cell and sums them, which on
+the CPU is memory traffic (454 points x 96 coefficients, 350 kB per evaluation) and was
+most of the rough sphere's likelihood cost. On cells in p, a point gathers 4 x 4.
+
+Construction (deterministic, from the stored table, on first use). Each piece
+[p_k, p_k+1] of the table is cut into ``p_cells[k]`` equal cells; on each cell every
+spline coefficient and x_c(p) are the cubic Hermite interpolants of the Chebyshev
+interpolant's values and p-derivatives at the cell ends (exact derivatives of the
+Chebyshev series). The result is C1 in p inside a piece, continuous to the table's error at
+a break, as before. Its error against the Chebyshev interpolant is at most
+h^4/384 max|d^4 S/dp^4| per cell of width h; the tests measure it (the rough sphere:
+below 1e-6 in Delta f/f0, against the table's stated 3e-5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import jax.numpy as jnp
+import numpy as np
+from numpy.polynomial import chebyshev as cheb
+
+from ._math import knot_cell, materialize
+
+__all__ = ["both_regions", "resample", "evaluate"]
+
+_KEY = "_p_cells_resampled"   # where the resampled arrays are kept, in the loaded table
+
+
+def both_regions(table: dict[str, np.ndarray]) -> np.ndarray:
+    """The contact cells' coefficients, then the flight cells' (axis -2: cells)."""
+    return np.concatenate([table["coef_contact"], table["coef_flight"]], axis=-2)
+
+
+def _hermite(values: np.ndarray, slopes: np.ndarray, h: float) -> np.ndarray:
+    # cells along axis 0 (n + 1 nodes -> n cells); powers of (p - p_j), highest first
+    f0, f1, d0, d1 = values[:-1], values[1:], slopes[:-1], slopes[1:]
+    s = (f1 - f0) / h
+    return np.stack([(d0 + d1 - 2.0 * s) / h**2, (3.0 * s - 2.0 * d0 - d1) / h, d0, f0], -1)
+
+
+def resample(table: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The Hermite cells of ``table`` (its 'p_cells': cells per piece), computed once and
+    kept in the table dict."""
+    if _KEY in table:
+        return table[_KEY]
+    edges = np.asarray(table.get("p_edges", table["p_range"]), float)
+    counts = np.asarray(table["p_cells"], int).reshape(-1)
+    if counts.size != edges.size - 1 or np.any(counts < 1):
+        raise ValueError(f"p_cells {counts.tolist()}: one count >= 1 per piece "
+                         f"({edges.size - 1})")
+    coef, xcc = both_regions(table), np.asarray(table["xc_cheb"])
+    if "p_edges" not in table:
+        coef, xcc = coef[None], xcc[None]
+    cells, xcs = [], []
+    for k, n in enumerate(counts):
+        lo, hi = edges[k], edges[k + 1]
+        nu = np.linspace(-1.0, 1.0, n + 1)
+        h = (hi - lo) / n
+        for a, out in ((coef[k], cells), (xcc[k], xcs)):
+            c = np.moveaxis(a, -1, 0)                          # Chebyshev index first
+            v = np.moveaxis(cheb.chebval(nu, c), -1, 0)        # (n + 1, ...)
+            d = np.moveaxis(cheb.chebval(nu, cheb.chebder(c)), -1, 0) * 2.0 / (hi - lo)
+            out.append(_hermite(v, d, h))
+    # (cells, 4 u-powers, knots, 4 p-powers) -> (cells, knots, 4 u-powers, 4 p-powers):
+    # one point's 16 coefficients contiguous
+    res = {"coef": np.ascontiguousarray(np.transpose(np.concatenate(cells), (0, 2, 1, 3))),
+           "xc": np.concatenate(xcs), "lo": edges[:-1],
+           "width": (edges[1:] - edges[:-1]) / counts, "offset": np.cumsum(counts) - counts,
+           "count": counts, "breaks": edges[1:-1]}
+    table[_KEY] = res
+    return res
+
+
+def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, ps: jnp.ndarray,
+             prefactor: Callable[[jnp.ndarray], jnp.ndarray] | None = None) -> jnp.ndarray:
+    """S(x, p) on the Hermite cells, xs in [0, x_max] and ps in the table's range (clamped
+    by the caller) [-]."""
+    r = resample(table)
+    xs, ps = jnp.broadcast_arrays(xs, ps)
+    k = sum((ps >= b).astype(jnp.int32) for b in r["breaks"]) + jnp.zeros(ps.shape, jnp.int32)
+    lo, width = jnp.asarray(r["lo"])[k], jnp.asarray(r["width"])[k]
+    j = jnp.clip(jnp.floor((ps - lo) / width).astype(jnp.int32), 0,
+                 jnp.asarray(r["count"])[k] - 1)
+    dp = ps - (lo + j * width)
+    cell = materialize(jnp.asarray(r["offset"])[k] + j)
+    a = jnp.asarray(r["xc"])[cell]
+    xc = ((a[..., 0] * dp + a[..., 1]) * dp + a[..., 2]) * dp + a[..., 3]
+    x_max = float(table["x_max"])
+    uk, vk = table["u_knots"], table["v_knots"]
+    last = uk.size - 1
+    u = xs / xc
+    v = (xs - xc) / (x_max - xc)
+    iu, du = knot_cell(uk, u, last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0))))
+    iv, dv = knot_cell(vk, v, (vk.size - 1) * jnp.sqrt(jnp.clip(v, 0.0, 1.0)))
+    inside = xs <= xc
+    g = jnp.asarray(r["coef"])[cell, materialize(jnp.where(inside, iu, iv + last))]
+    e = dp[..., None]
+    c = ((g[..., 0] * e + g[..., 1]) * e + g[..., 2]) * e + g[..., 3]   # (..., 4 u-powers)
+    d = jnp.where(inside, du, dv)
+    y = ((c[..., 0] * d + c[..., 1]) * d + c[..., 2]) * d + c[..., 3]
+    pre = 1.0 if prefactor is None else prefactor(ps)
+    return jnp.where(inside, pre * xs**2 * y, y)
