@@ -29,7 +29,7 @@ from numpy.polynomial import chebyshev as cheb
 
 from ._math import knot_cell, materialize
 
-__all__ = ["both_regions", "resample", "evaluate"]
+__all__ = ["both_regions", "resample", "evaluate", "amplitude_cell"]
 
 _KEY = "_p_cells_resampled"   # where the resampled arrays are kept, in the loaded table
 
@@ -93,6 +93,20 @@ def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, ps: jnp.ndarray,
     cell = materialize(jnp.asarray(r["offset"])[k] + j)
     a = jnp.asarray(r["xc"])[cell]
     xc = ((a[..., 0] * dp + a[..., 1]) * dp + a[..., 2]) * dp + a[..., 3]
+    inside, i, d = amplitude_cell(table, xs, xc)
+    g = jnp.asarray(r["coef"])[cell, materialize(i)]
+    e = dp[..., None]
+    c = ((g[..., 0] * e + g[..., 1]) * e + g[..., 2]) * e + g[..., 3]   # (..., 4 u-powers)
+    y = ((c[..., 0] * d + c[..., 1]) * d + c[..., 2]) * d + c[..., 3]
+    pre = 1.0 if prefactor is None else prefactor(ps)
+    return jnp.where(inside, pre * xs**2 * y, y)
+
+
+def amplitude_cell(table: dict[str, np.ndarray], xs: jnp.ndarray,
+                   xc: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
+    """(inside, cell, offset) of amplitude xs [-] in ``table``'s spline cells, the contact
+    cells (u = x/x_c, inside = x <= x_c) first and the flight cells (v = (x - x_c)/(x_max -
+    x_c)) after them, as :func:`both_regions` stores them, so one gather reads either."""
     x_max = float(table["x_max"])
     uk, vk = table["u_knots"], table["v_knots"]
     last = uk.size - 1
@@ -101,10 +115,4 @@ def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, ps: jnp.ndarray,
     iu, du = knot_cell(uk, u, last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0))))
     iv, dv = knot_cell(vk, v, (vk.size - 1) * jnp.sqrt(jnp.clip(v, 0.0, 1.0)))
     inside = xs <= xc
-    g = jnp.asarray(r["coef"])[cell, materialize(jnp.where(inside, iu, iv + last))]
-    e = dp[..., None]
-    c = ((g[..., 0] * e + g[..., 1]) * e + g[..., 2]) * e + g[..., 3]   # (..., 4 u-powers)
-    d = jnp.where(inside, du, dv)
-    y = ((c[..., 0] * d + c[..., 1]) * d + c[..., 2]) * d + c[..., 3]
-    pre = 1.0 if prefactor is None else prefactor(ps)
-    return jnp.where(inside, pre * xs**2 * y, y)
+    return inside, jnp.where(inside, iu, iv + last), jnp.where(inside, du, dv)

@@ -41,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import p_cells
-from ._math import knot_cell, materialize
+from ._math import materialize
 
 __all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
            "chebyshev_basis", "kink_amplitude", "to_chebyshev", "spline_coefficients"]
@@ -249,17 +249,10 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
     basis = chebyshev_basis(nu, jnp.shape(xc_cheb)[-1])
     xc = (basis @ jnp.asarray(xc_cheb) if piece is None
           else jnp.sum(basis * jnp.asarray(xc_cheb), axis=-1))
-    uk, vk = table["u_knots"], table["v_knots"]
-    last = uk.size - 1
-    u = xs / xc
-    v = (xs - xc) / (x_max - xc)
-    iu, du = knot_cell(uk, u, last * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0))))
-    iv, dv = knot_cell(vk, v, (vk.size - 1) * jnp.sqrt(jnp.clip(v, 0.0, 1.0)))
     # one gather from the contact and flight cells side by side, not one per region: on
     # the CPU the per-point gathers are most of a table's cost (a law whose shape
     # parameter differs per protocol: 110 -> 75 us for 454 points, value and gradient)
-    inside = xs <= xc
-    y = _cell_eval(p_cells.both_regions(table), jnp.where(inside, iu, iv + last),
-                   jnp.where(inside, du, dv), basis, piece)
+    inside, i, d = p_cells.amplitude_cell(table, xs, xc)
+    y = _cell_eval(p_cells.both_regions(table), i, d, basis, piece)
     pre = 1.0 if prefactor is None else prefactor(ps)
     return jnp.where(inside, pre * xs**2 * y, y)
