@@ -17,7 +17,7 @@ import numpyro
 import numpyro.distributions as dist
 
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
-           "design_inputs", "simulate", "scene_quantities",
+           "design_inputs", "simulate", "scene_quantities", "sweep_layout", "SWEEP_LAYOUT_KEYS",
            "OBSERVED_SITES", "OBSERVED_DATA_KEYS"]
 
 OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs")
@@ -58,7 +58,44 @@ def model_inputs(ds: Any) -> dict[str, Any]:
         "nu_bead": float(sc.bead_material.poisson),
         "nu_rod": float(sc.rod_material.poisson),
         "scene": scene_quantities(sc),
+        **_jnp_layout(ds.drive_protocol, f0.size),
     }
+
+
+SWEEP_LAYOUT_KEYS = ("sweep_grid", "sweep_valid", "sweep_position")
+"""The model inputs that lay the sweeps out by protocol (:func:`sweep_layout`)."""
+
+
+def sweep_layout(proto: Any, n_protocols: int) -> dict[str, np.ndarray]:
+    """The sweeps laid out as a (protocol, slot) grid, K = most sweeps of one protocol.
+
+    ``sweep_grid`` (P, K): the sweep in each slot (a padding slot repeats index 0);
+    ``sweep_valid`` (P, K): True in the slots that hold a sweep; ``sweep_position``
+    (n_sweeps,): each sweep's slot in the flattened grid. Why: a law whose backbone shape
+    depends on the protocol (its delta0) then evaluates the shape's per-protocol part once
+    per protocol, not once per sweep, and no per-sweep gather of delta0 enters the
+    gradient (the rough sphere's likelihood gradient: measured in docs/bench)."""
+    proto = np.asarray(proto, int).reshape(-1)
+    n_p = int(n_protocols)
+    if proto.size and (proto.min() < 0 or proto.max() >= n_p):
+        raise ValueError(f"sweep protocol indices must lie in [0, {n_p}), got "
+                         f"[{proto.min()}, {proto.max()}]")
+    counts = np.bincount(proto, minlength=n_p)
+    k = max(int(counts.max(initial=0)), 1)
+    grid = np.zeros((n_p, k), np.int32)
+    valid = np.zeros((n_p, k), bool)
+    position = np.zeros(proto.size, np.int32)
+    fill = np.zeros(n_p, int)
+    for i, p in enumerate(proto):
+        grid[p, fill[p]] = i
+        valid[p, fill[p]] = True
+        position[i] = p * k + fill[p]
+        fill[p] += 1
+    return {"sweep_grid": grid, "sweep_valid": valid, "sweep_position": position}
+
+
+def _jnp_layout(proto: Any, n_protocols: int) -> dict[str, Any]:
+    return {k: jnp.asarray(v) for k, v in sweep_layout(proto, n_protocols).items()}
 
 
 def scene_quantities(sc: Any) -> dict[str, float]:
@@ -135,6 +172,7 @@ def design_inputs(scene: Any, *, n_protocols: int, amplitudes: Any,
         "nu_bead": float(scene.bead_material.poisson),
         "nu_rod": float(scene.rod_material.poisson),
         "scene": scene_quantities(scene),
+        **_jnp_layout(proto, n_protocols),
     }
 
 

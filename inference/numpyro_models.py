@@ -76,7 +76,7 @@ from models.law import RungUnavailable
 from models.registry import FIT_RUNGS, get_law, law_names
 
 from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
-from .likelihood import observe_logq
+from .likelihood import SWEEP_LAYOUT_KEYS, observe_logq, sweep_layout
 from .overlap import MeasuredF0, invert_log_overlap, log_overlap
 from .priors import law_prior, prior
 
@@ -209,16 +209,20 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
     delta0 = numpyro.deterministic("delta0", jnp.exp(log_overlap(law.name, f0, kw)))
     omega0 = 2.0 * jnp.pi * f0
     if spec.use_shift:
-        p = data["proto"]
-        x = data["amplitude"] / delta0[p]
-        curve = law.shift(x, rung=spec.rung, delta0=delta0[p], omega0=omega0[p], **kw)
-        inside = law.in_domain(x, rung=spec.rung, delta0=delta0[p], omega0=omega0[p], **kw)
+        # the sweeps on a (protocol, slot) grid (inference.likelihood.sweep_layout): every
+        # protocol quantity enters as a (P, 1) column; padding slots hold x = 0.5, which
+        # every rung covers, and are never observed
+        grid, valid, position = _layout(data)
+        x = jnp.where(valid, data["amplitude"][grid] / delta0[:, None], 0.5)
+        per = {"delta0": delta0[:, None], "omega0": omega0[:, None], **kw}
+        curve = law.shift(x, rung=spec.rung, **per)
+        inside = law.in_domain(x, rung=spec.rung, **per)
         if inside is not None:
             # outside its domain the fast path holds a value that is not the law's: such
             # a point gets zero likelihood rather than a silently wrong one (the prior
             # is in effect truncated to the domain; log Z counts only the mass inside)
-            numpyro.factor("law_domain", jnp.where(jnp.all(inside), 0.0, -jnp.inf))
-        observe_drive(spec, curve, data)
+            numpyro.factor("law_domain", jnp.where(jnp.all(inside | ~valid), 0.0, -jnp.inf))
+        observe_drive(spec, jnp.reshape(curve, -1)[position], data)
     if spec.use_q:
         if law.predicts_q:
             sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))
@@ -227,6 +231,23 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
                          likelihood=spec.likelihood, df=spec.student_df)
         else:
             nuisance_q(spec, data)
+
+
+def _layout(data: dict) -> tuple[Any, Any, Any]:
+    n_sweeps = int(np.shape(data["proto"])[0])
+    if all(k in data for k in SWEEP_LAYOUT_KEYS):
+        grid, valid, position = (data[k] for k in SWEEP_LAYOUT_KEYS)
+        if np.shape(position) != (n_sweeps,):
+            # inputs whose sweeps were changed after model_inputs laid them out
+            raise ValueError(f"the inputs' sweep layout holds {np.shape(position)[0]} sweeps, "
+                             f"their 'proto' {n_sweeps}: rebuild them with "
+                             "inference.likelihood.model_inputs, or drop the keys "
+                             f"{SWEEP_LAYOUT_KEYS}")
+        return grid, valid, position
+    # inputs built by hand: the layout from their (concrete) protocol indices
+    n_p = data.get("n_protocols") or int(np.shape(data["f0"])[0])
+    lay = sweep_layout(np.asarray(data["proto"]), int(n_p))
+    return tuple(jnp.asarray(lay[k]) for k in SWEEP_LAYOUT_KEYS)
 
 
 def _probe(spec: ModelSpec, data_scene: dict | None) -> None:

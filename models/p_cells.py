@@ -82,9 +82,9 @@ def resample(table: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, ps: jnp.ndarray,
              prefactor: Callable[[jnp.ndarray], jnp.ndarray] | None = None) -> jnp.ndarray:
     """S(x, p) on the Hermite cells, xs in [0, x_max] and ps in the table's range (clamped
-    by the caller) [-]."""
+    by the caller) [-]; broadcast together, the cell in p is found at ps's own shape."""
     r = resample(table)
-    xs, ps = jnp.broadcast_arrays(xs, ps)
+    xs, ps = jnp.asarray(xs, float), jnp.asarray(ps, float)
     k = sum((ps >= b).astype(jnp.int32) for b in r["breaks"]) + jnp.zeros(ps.shape, jnp.int32)
     lo, width = jnp.asarray(r["lo"])[k], jnp.asarray(r["width"])[k]
     j = jnp.clip(jnp.floor((ps - lo) / width).astype(jnp.int32), 0,

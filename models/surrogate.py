@@ -239,12 +239,13 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
     branches are evaluated on clamped coordinates so values and gradients stay finite)."""
     p_lo, p_hi = (float(v) for v in table["p_range"])
     x_max = float(table["x_max"])
-    if jnp.ndim(p) > 0:
-        x, p = jnp.broadcast_arrays(x, p)
     xs = jnp.clip(x, 0.0, x_max)
     ps = jnp.clip(p, p_lo, p_hi)
     if "p_cells" in table:
+        # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)
+    if jnp.ndim(ps) > 0:
+        xs, ps = jnp.broadcast_arrays(xs, ps)
     piece, nu, xc_cheb = _piece(table, ps)
     basis = chebyshev_basis(nu, jnp.shape(xc_cheb)[-1])
     xc = (basis @ jnp.asarray(xc_cheb) if piece is None
