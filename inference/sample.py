@@ -35,7 +35,8 @@ from .variables import SAMPLE_STATS, SITE_DIMS, VARIABLES
 # starts differ, far less than any basin the mode search separates
 _INIT_JITTER = 0.02
 
-__all__ = ["configure", "FitResult", "run_nuts", "idata_coords", "describe", "EXTRA_FIELDS"]
+__all__ = ["configure", "FitResult", "run_nuts", "nuts_kernel", "draw_cost", "idata_coords",
+           "describe", "EXTRA_FIELDS"]
 
 # everything arviz turns into sample_stats: lp (from potential_energy), step_size,
 # n_steps and tree_depth (from num_steps), acceptance_rate, diverging, energy
@@ -121,6 +122,54 @@ def describe(idata: az.InferenceData) -> az.InferenceData:
     return idata
 
 
+def nuts_kernel(model: Callable, *, target_accept: float = 0.9, max_tree_depth: int = 10,
+                dense_mass: bool = True) -> NUTS:
+    """The NUTS kernel every fit uses (:func:`run_nuts`'s defaults)."""
+    # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
+    # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
+    return NUTS(model, target_accept_prob=target_accept, max_tree_depth=max_tree_depth,
+                dense_mass=dense_mass, init_strategy=init_to_median(num_samples=15))
+
+
+def draw_cost(model: Callable, data: dict[str, Any], *, init_params: dict | None = None,
+              num_warmup: int = 200, num_draws: int = 200, seed: int = 0,
+              repeats: int = 3) -> tuple[float, float]:
+    """(seconds per post-warmup draw, leapfrog steps per draw) of one NUTS chain of
+    :func:`nuts_kernel`, its ``num_draws`` draws one compiled loop timed after a call to
+    compile (best of ``repeats``).
+
+    Why not the NUTS run's wall time: it holds the compilation, whose noise (tenths of a
+    second) can exceed a fast law's whole sampling. Why not a gradient timed call by call
+    from Python: NUTS takes its leapfrog steps inside one XLA program, so a per-call
+    dispatch (~30 us on a 2-core CPU with 4 host devices) is not part of their cost, while
+    the sampler's own work per step (tree building, the mass matrix) is, and both are
+    what this loop times. The chain runs on one thread; ``init_params`` (unconstrained)
+    as :func:`run_nuts` takes them.
+    """
+    kernel = nuts_kernel(model)
+    mcmc = MCMC(kernel, num_warmup=num_warmup, num_samples=num_draws, num_chains=1,
+                progress_bar=False)
+    mcmc.warmup(jax.random.PRNGKey(seed), data=data, init_params=init_params)
+    state = mcmc.last_state
+
+    # the data closed over, as MCMC.run holds them (jit_model_args=False): constants of the
+    # program, so XLA folds what depends on them alone, as it does in a fit
+    @jax.jit
+    def draws(state):
+        def body(s, _):
+            s = kernel.sample(s, (), {"data": data})
+            return s, s.num_steps
+        return jax.lax.scan(body, state, None, length=num_draws)
+
+    _, steps = jax.block_until_ready(draws(state))
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(draws(state))
+        best = min(best, time.perf_counter() - t0)
+    return best / num_draws, float(np.mean(np.asarray(steps)))
+
+
 def run_nuts(
     model: Callable,
     data: dict[str, Any],
@@ -165,11 +214,9 @@ def run_nuts(
     """
     if init not in ("modes", "median"):
         raise ValueError(f"init must be 'modes' or 'median', not {init!r}")
-    # start at the prior median: numpyro's default (uniform in (-2, 2) unconstrained)
-    # puts log delta0 [m] near 0, i.e. a metre-sized overlap, where a chain can stall
     def make_kernel():
-        return NUTS(model, target_accept_prob=target_accept, max_tree_depth=max_tree_depth,
-                    dense_mass=dense_mass, init_strategy=init_to_median(num_samples=15))
+        return nuts_kernel(model, target_accept=target_accept, max_tree_depth=max_tree_depth,
+                           dense_mass=dense_mass)
 
     kernel = make_kernel()
     method = _chain_method(num_chains, chain_method)

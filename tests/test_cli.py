@@ -223,3 +223,22 @@ def test_config_file_and_bad_key(tmp_path, capsys):
     cfg.write_text("[samplng]\nchains = 2\n")
     assert main(["fit", "--law", "hertz", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
     assert "did you mean 'sampling'" in capsys.readouterr().err
+
+
+def test_rungs_default_laws_name_those_left_out():
+    # every default law but the baseline is either fitted (a fast path at every rung asked
+    # for) or listed with the reason: none is dropped without a word
+    from models.registry import get_law
+    from workflows.pipeline import default_model_names
+    from workflows.rungs import rung_laws
+
+    for rungs in (["first_order", "backbone"], ["first_order", "backbone", "paper_eq25"]):
+        names, left = rung_laws(rungs)
+        assert sorted(names + list(left)) == sorted(n for n in default_model_names()
+                                                    if n != "baseline")
+        for n in names:
+            assert set(rungs) <= set(get_law(n).shifts)
+        for n, why in left.items():
+            missing = [r for r in rungs if r not in get_law(n).shifts]
+            assert missing and all(r in why for r in missing), (n, why)
+    assert rung_laws(["first_order", "backbone"], ["hertz"]) == (["hertz"], {})

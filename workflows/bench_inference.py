@@ -4,9 +4,10 @@ For each law of the comparison: compile time (a 1+1-iteration run of the same
 kernel) apart from sampling time, the smallest bulk ESS over the scalar
 parameters, ESS per second of sampling, and the evidence by both estimators
 with its wall time. Because a fast law's sampling can take less time than the noise of its
-compile probe, sampling is also measured without the probe: ESS per second of gradient
-work, the draws' leapfrog steps times the cost of one compiled gradient timed apart
-(:func:`gradient_cost`); the laws are compared with Hertz both ways.
+compile probe, sampling is also measured without the probe: ESS per second of sampling
+work, the draws' leapfrog steps times the cost of one step inside NUTS, timed on a
+compiled one-chain loop of post-warmup draws (:func:`inference.sample.draw_cost`); the
+laws are compared with Hertz both ways.
 
 The baseline is what a physicist would write without this project: the same
 Hertz posterior (first-order shift, per-protocol overlap conditioned on the
@@ -118,29 +119,6 @@ def timed_nuts(model, inputs: dict[str, Any], chains: int, warm: int, draws: int
     return fit, t["compile_s"], sampling, ess
 
 
-def gradient_cost(model, inputs: dict[str, Any], repeats: int = 200) -> float:
-    """Seconds per call of the compiled potential energy and its gradient (what one NUTS
-    leapfrog step evaluates) at the prior median, on one core: the best of 3 timings of
-    ``repeats`` calls, after one call to compile."""
-    import jax
-    from numpyro.infer import init_to_median
-    from numpyro.infer.util import initialize_model
-
-    info = initialize_model(jax.random.PRNGKey(0), model, model_kwargs={"data": inputs},
-                            init_strategy=init_to_median(num_samples=15))
-    z = info.param_info.z
-    fn = jax.jit(jax.value_and_grad(info.potential_fn))
-    jax.block_until_ready(fn(z))
-    best = float("inf")
-    for _ in range(3):
-        t0 = time.perf_counter()
-        for _ in range(repeats):
-            out = fn(z)
-        jax.block_until_ready(out)
-        best = min(best, (time.perf_counter() - t0) / repeats)
-    return best
-
-
 def _run_emcee(d, n_walkers: int, n_steps: int, seed: int):
     import emcee
 
@@ -160,26 +138,27 @@ def _run_emcee(d, n_walkers: int, n_steps: int, seed: int):
 
 def _ratios(rows: list[dict[str, Any]], specs: dict[str, Any]) -> str:
     """Each backbone model's ESS/s as a fraction of Hertz's, two ways: sampling alone
-    (ESS per second of gradient work: the draws' leapfrog steps times the measured cost of
-    one gradient, which no compilation enters) and the whole NUTS run with its
+    (ESS per second of sampling work: the draws' leapfrog steps times the measured cost of
+    one step inside NUTS, which no compilation enters) and the whole NUTS run with its
     compilation."""
     ref = next((r for r in rows if r["model"] == "hertz"), None)
     if ref is None:
         return ""
     lines = ["ESS/s as a fraction of Hertz's (target for the rough-contact and adhesion "
-             "laws: >= 1/3). Sampling alone = ESS per second of gradient work (leapfrog "
-             "steps of the draws x the cost of one compiled gradient, measured apart); "
-             "with compilation = ESS over the whole NUTS wall time:", ""]
+             "laws: >= 1/3). Sampling alone = ESS per second of sampling work (leapfrog "
+             "steps of the draws x the cost of one step inside NUTS, timed on a compiled "
+             "one-chain loop of post-warmup draws); with compilation = ESS over the whole "
+             "NUTS wall time:", ""]
     for r in rows:
-        if r["model"] not in specs or r["model"] == "hertz" or "ess_per_gradient_s" not in r:
+        if r["model"] not in specs or r["model"] == "hertz" or "ess_per_step_s" not in r:
             continue
-        a = r["ess_per_gradient_s"] / ref["ess_per_gradient_s"]
+        a = r["ess_per_step_s"] / ref["ess_per_step_s"]
         b = r["ess_per_s_incl_compile"] / ref["ess_per_s_incl_compile"]
         mark = lambda v: "below 1/3" if v < 1 / 3 else "ok"
         lines.append(f"- {r['model']}: sampling alone **{a:.2f}** ({mark(a)}), with "
-                     f"compilation **{b:.2f}** ({mark(b)}); {r['us_per_gradient']:.0f} us "
-                     f"per gradient against {ref['us_per_gradient']:.0f}, "
-                     f"{r['gradients_per_draw']:.1f} gradients per draw against "
+                     f"compilation **{b:.2f}** ({mark(b)}); {r['us_per_step']:.1f} us "
+                     f"per step against {ref['us_per_step']:.1f}, "
+                     f"{r['gradients_per_draw']:.1f} steps per draw against "
                      f"{ref['gradients_per_draw']:.1f}")
     return "\n".join(lines)
 
@@ -203,6 +182,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     from inference.bridge import bridge_sampling_log_z
     from inference.likelihood import model_inputs
     from inference.numpyro_models import ModelSpec, build_model
+    from inference.sample import draw_cost
 
     from .comparison import JOBS
     from .config import DEFAULTS, merge
@@ -235,16 +215,19 @@ def run(out_dir: Path, quick: bool = False) -> Path:
             ns = ns_all[name]
             br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata)
             t_bridge += br.wall_s
-        grad_s = gradient_cost(model, inputs)
+        init = None if fit.modes is None else fit.modes.best
+        draw_s, draw_steps = draw_cost(model, inputs, init_params=init, num_warmup=warm // 2,
+                                       num_draws=draws // 2)
+        step_s = draw_s / draw_steps
         steps = np.asarray(fit.idata.sample_stats["n_steps"])
         grads = float(np.sum(steps))
         rows.append({"model": name, "rung": spec.rung, "compile_s": compile_s,
                      "mode_search_s": fit.timings.get("mode_search_s"),
                      "sampling_s": sampling, "min_bulk_ess": ess, "ess_per_s": ess / sampling,
                      "ess_per_s_incl_compile": ess / fit.timings["nuts_s"],
-                     "us_per_gradient": 1e6 * grad_s,
+                     "us_per_step": 1e6 * step_s,
                      "gradients_per_draw": grads / steps.size,
-                     "ess_per_gradient_s": ess / (grads * grad_s),
+                     "ess_per_step_s": ess / (grads * step_s),
                      "log_z_ns": ns.log_z if ns else None, "err_ns": ns.log_z_err if ns else None,
                      "ns_s": ns.wall_s if ns else None,
                      "log_z_bridge": br.log_z if br else None,

@@ -4,13 +4,17 @@ The paper's conclusions rest on its first-order shift (and, for the viscoelastic
 Eq. 25). ``beadrod rungs`` fits every law at two or more rungs on the same data and
 reports, per law and parameter, the posterior under each rung and the move of the mean in
 units of the reference rung's posterior sd; per law, log Z under each rung and its change
-(errors in quadrature); and the preferred law under each rung. A law whose model is the
-same at two rungs (JKR has no backbone rung and falls back to first order; the law-free
-baseline has no rung) is fitted once and marked so.
+(errors in quadrature); and the preferred law under each rung. Two rungs that build the
+same model spec are fitted once and marked so; a law that computes one rung as another
+(Hertz's 'paper_eq25' is its first order) is fitted at both, and its change is then zero
+within the evidence error. By default every law of the default comparison that has all
+the rungs asked for is fitted; the others are listed as not fitted, with the rungs they
+lack (the law-free baseline has no rung).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from pathlib import Path
@@ -19,7 +23,7 @@ from typing import Any
 from ._io import write_json, write_text
 from .config import RUNGS
 
-__all__ = ["RUNGS", "check_rungs", "run_rungs", "rung_tables"]
+__all__ = ["RUNGS", "check_rungs", "rung_laws", "run_rungs", "rung_tables"]
 
 
 def check_rungs(rungs: list[str]) -> None:
@@ -29,26 +33,56 @@ def check_rungs(rungs: list[str]) -> None:
                          f"(got {','.join(rungs)!r})")
 
 
+def rung_laws(rungs: list[str], laws: list[str] | None = None
+              ) -> tuple[list[str], dict[str, str]]:
+    """(laws to fit, {law: why it is not fitted}): ``laws`` when given (a named law that
+    lacks a rung is refused later, by the model specs, never swapped; one without a fast
+    path is fitted by the generic quadrature, however long that takes), else every law of
+    the default comparison but the baseline that has a fast path at each of ``rungs``.
+
+    Why the fast path: without one a rung is the generic quadrature of models.generic at
+    every likelihood call; the rough sphere's first order so ran NUTS for over 19 minutes
+    without finishing on the 2-core CPU, where its backbone fit takes 86 s."""
+    from models.registry import get_law
+
+    from .pipeline import default_model_names
+
+    if laws:
+        return list(laws), {}
+    names, left = [], {}
+    for n in (n for n in default_model_names() if n != "baseline"):
+        law = get_law(n)
+        lacks = [r for r in rungs if r not in law.rungs]
+        slow = [r for r in rungs if r in law.rungs and r not in law.shifts]
+        why = ([f"no rung {', '.join(lacks)}"] if lacks else []) + (
+            [f"no fast path at {', '.join(slow)} (generic quadrature, too slow for NUTS; "
+             "name it with --laws to fit it anyway)"] if slow else [])
+        if why:
+            left[n] = "; ".join(why)
+        else:
+            names.append(n)
+    return names, left
+
+
 def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any]:
     """Fit ``cfg['laws']`` (default: every law but the baseline) at each of ``rungs`` into
     ``out/<rung>/`` (as compare does: NUTS, gate, LOO, evidence) and write
     ``rungs.md``, ``rungs.csv`` and ``rungs.json`` into ``out``. Returns the JSON dict."""
     from inference.likelihood import model_inputs
-    from models.registry import get_law
 
     from .comparison import JOBS, job_steps, model_specs, n_devices
     from .parallel import Job, resolve_workers, run_jobs
-    from .pipeline import default_model_names, load_data, preferred_law
+    from .pipeline import load_data, preferred_law
     from .progress import RunProgress
 
     check_rungs(rungs)
     t0 = time.perf_counter()
     ds = load_data(cfg)
     inputs = model_inputs(ds)
-    # default: every law of the default comparison that has all the rungs asked for (a law
-    # named with --laws that lacks one is refused by comparison_specs, never swapped)
-    names = cfg["laws"] or [n for n in default_model_names() if n != "baseline"
-                            and set(rungs) <= set(get_law(n).rungs)]
+    names, not_fitted = rung_laws(rungs, cfg["laws"])
+    if not_fitted:
+        logging.getLogger("beadrod").warning(
+            "not fitted: %s", "; ".join(f"{n} ({why})" for n, why in not_fitted.items()))
     jobs, same = [], {}
     for rung in rungs:
         for name, spec in model_specs(cfg, names, rung).items():
@@ -67,7 +101,8 @@ def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any
             fits[(rung, name)] = {**done[key].summary, "fitted_as": key}
     preferred = {r: preferred_law([fits[(r, n)] for n in names])[0] for r in rungs}
     params, evidence = rung_tables(fits, rungs, names)
-    result = {"rungs": list(rungs), "laws": names, "data_hash": ds.data_hash,
+    result = {"rungs": list(rungs), "laws": names, "not_fitted": not_fitted,
+              "data_hash": ds.data_hash,
               "params": params, "evidence": evidence, "preferred": preferred,
               "wall_s": time.perf_counter() - t0}
     _write(Path(out), result)
@@ -129,6 +164,9 @@ def _write(out: Path, result: dict[str, Any]) -> None:
     md = [f"# How the forward-model rung moves posteriors and evidence (reference: {ref})",
           "", f"Data hash {result['data_hash'][:12]}; laws fitted at each rung as "
           "`beadrod compare` fits them. Move = (mean - reference mean) / reference sd.", "",
+          *([("Not fitted: " + "; ".join(
+              f"{n} ({why})" for n, why in result["not_fitted"].items()) + "."),
+             ""] if result.get("not_fitted") else []),
           "## Evidence", "",
           markdown_table(["law", "rung", "log Z", f"log Z ({ref})", "Δ log Z", "status"],
                          [[r["law"], r["rung"], _fmt(r["log_z"], ".2f"),
