@@ -73,3 +73,14 @@ def test_compare_file_law_reproduces_builtin_hertz(tmp_path):
     pb = {p["name"]: p for p in b["params"]}["young"]
     for k in ("q05", "q95"):
         assert pb[k] == pytest.approx(pa[k], rel=0.01)
+
+
+def test_rungs_fits_the_file_law_by_default():
+    # a law file's law has no fast first order, yet `rungs --law-file` fits it: the file
+    # asked for it (built-in laws without a fast path are left out, with the reason)
+    from workflows import lawfiles
+    from workflows.rungs import rung_laws
+
+    lawfiles.load([LAW_FILE])
+    names, left = rung_laws(["first_order", "backbone"])
+    assert "hertz_scratch" in names and "hertz_scratch" not in left

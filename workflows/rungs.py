@@ -38,7 +38,8 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
     """(laws to fit, {law: why it is not fitted}): ``laws`` when given (a named law that
     lacks a rung is refused later, by the model specs, never swapped; one without a fast
     path is fitted by the generic quadrature, however long that takes), else every law of
-    the default comparison but the baseline that has a fast path at each of ``rungs``.
+    the default comparison but the baseline that has each of ``rungs``, with a fast path
+    at each unless it comes from a law file.
 
     Why the fast path: without one a rung is the generic quadrature of models.generic at
     every likelihood call; the rough sphere's first order so ran NUTS for over 19 minutes
@@ -53,7 +54,9 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
     for n in (n for n in default_model_names() if n != "baseline"):
         law = get_law(n)
         lacks = [r for r in rungs if r not in law.rungs]
-        slow = [r for r in rungs if r in law.rungs and r not in law.shifts]
+        # a law from --law-file is fitted at every rung it has: its file asked for it
+        slow = [r for r in rungs if r in law.rungs and r not in law.shifts
+                and law.source == "built-in"]
         why = ([f"no rung {', '.join(lacks)}"] if lacks else []) + (
             [f"no fast path at {', '.join(slow)} (generic quadrature, too slow for NUTS; "
              "name it with --laws to fit it anyway)"] if slow else [])
