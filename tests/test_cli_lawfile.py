@@ -46,11 +46,14 @@ def test_a_broken_law_file_is_one_line_naming_the_file(tmp_path, capsys):
 
 
 def test_compare_fits_the_file_law(tmp_path):
-    """The file's law goes through the whole comparison (fit, evidence, figures, report);
-    beside the built-in Hertz, at full settings, in the slow test below."""
+    """The file's law goes through the comparison (fit, evidence, tables, report); its
+    figures (31 s of this test's 84 alone, the generic quadrature's posterior curves) and
+    the comparison beside the built-in Hertz at full settings are the slow test's below."""
     out = tmp_path / "run"
+    cfg = tmp_path / "no_figures.toml"
+    cfg.write_text("[report]\nfigures = false\n")
     assert main(["compare", "--out", str(out), "--laws", "hertz_scratch", "--rung",
-                 "first_order", "--law-file", LAW_FILE, *TINY]) == 0
+                 "first_order", "--law-file", LAW_FILE, "--config", str(cfg), *TINY]) == 0
     table = pd.read_csv(out / "comparison.csv")
     assert set(table["law"]) == {"hertz_scratch"}
     assert set(table["rung"]) == {"first_order"}
@@ -65,6 +68,8 @@ def test_compare_file_law_reproduces_builtin_hertz(tmp_path):
     out = tmp_path / "full"
     assert main(["compare", "--out", str(out), "--laws", "hertz,hertz_scratch",
                  "--law-file", LAW_FILE, "--quiet", "--workers", "1"]) == 0
+    # the file law's posterior predictive figures, drawn beside the built-in's
+    assert (out / "figures" / "shift_ppc_lin.png").is_file()
     result = json.loads((out / "result.json").read_text())
     laws = {r["name"]: r for r in result["laws"]}
     a, b = laws["hertz"], laws["hertz_scratch"]
