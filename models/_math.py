@@ -7,11 +7,13 @@ both the value *and* the gradient stay finite where the branch is not taken.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
 __all__ = ["safe_pow", "safe_sqrt", "pos_pow", "safe_log", "smooth_relu", "knot_cell",
-           "materialize"]
+           "graded_cell", "horner_rows", "materialize"]
 
 
 def safe_sqrt(x: ArrayLike) -> jnp.ndarray:
@@ -64,6 +66,36 @@ def knot_cell(knots: ArrayLike, z: ArrayLike, frac: ArrayLike) -> tuple[jnp.ndar
     i = jnp.where((z < knots[i]) & (i > 0), i - 1, i)
     i = jnp.where((z >= knots[jnp.minimum(i + 1, last + 1)]) & (i < last), i + 1, i)
     return i, z - knots[i]
+
+
+def graded_cell(z: ArrayLike, frac: ArrayLike, knot: Callable[[jnp.ndarray], jnp.ndarray],
+                n_cells: int) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(i, z - knot(i)) for knots given by a closed form: i = floor(frac) clipped to
+    [0, n_cells - 1], ``frac`` the fractional index of z and ``knot(i)`` [same unit as z]
+    the knot at (float) index i, e.g. 1 - (1 - i/k)^2 for a grading towards 1.
+
+    Why not :func:`knot_cell`: on the CPU each per-point gather from a knot array costs
+    about as much as the rest of a cubic lookup (3 of them per grid, ~0.9 us each for
+    672 points); the closed form costs a few flops. No rounding repair is needed: a point
+    that rounding puts in the neighbouring cell is evaluated ~1e-16 outside it, where a
+    spline continuous across its knots has the same value to rounding.
+    """
+    i = jnp.clip(jnp.floor(jnp.nan_to_num(jnp.asarray(frac))), 0, n_cells - 1)
+    return i.astype(jnp.int32), jnp.asarray(z) - knot(i)
+
+
+def horner_rows(rows: ArrayLike, index: ArrayLike, d: ArrayLike) -> jnp.ndarray:
+    """sum_k rows[index, k] d^(K-1-k): the local polynomial of cell ``index`` at offset d.
+
+    ``rows`` (cells, K) holds each cell's power coefficients, highest first, contiguous:
+    one gather reads a point's K coefficients. A (K, cells) layout gathers K times, once
+    per strided row (measured 8.7 -> 5.5 us for 672 points, value only).
+    """
+    c = jnp.asarray(rows)[materialize(index)]
+    y = c[..., 0]
+    for k in range(1, c.shape[-1]):
+        y = y * d + c[..., k]
+    return y
 
 
 def materialize(index: ArrayLike) -> jnp.ndarray:

@@ -66,7 +66,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from . import hertz, inverse_spline
-from ._math import knot_cell, safe_pow
+from ._math import graded_cell, horner_rows, safe_pow
 from ._tables import rebuild_cli
 from .greenwood_tripp import MU_DEFAULT, SUMMIT_CUTOFF
 from .inverse_spline import solve_increasing
@@ -116,12 +116,12 @@ def reduced_hertz_approach(approach: ArrayLike) -> jnp.ndarray:
     # where, not clip: clip splits the gradient in half at the bounds
     tc = jnp.where(t <= top, jnp.where(t > 0.0, t, 0.0), top)
     z = jnp.arcsinh(tc / _Z_WIDTH)
-    zk = tab["z_knots"]
-    i, dz = knot_cell(zk, z, z / (zk[1] - zk[0]))
-    c = jnp.asarray(tab["coef"])[:, i]
-    y = c[0]
-    for k in range(1, c.shape[0]):
-        y = y * dz + c[k]
+    zk = np.asarray(tab["z_knots"])
+    h = float(zk[1] - zk[0])
+    if zk[0] != 0.0 or not np.allclose(np.diff(zk), h, rtol=1e-12, atol=0.0):
+        raise ValueError("the rough-sphere table's z knots are not uniform from 0; rebuild it")
+    i, dz = graded_cell(z, z / h, lambda j: j * h, zk.size - 1)
+    y = horner_rows(np.ascontiguousarray(np.asarray(tab["coef"]).T), i, dz)
     e_tab = (0.75 ** (2.0 / 3.0)) * safe_pow(tc, 7.0 / 3.0) * jnp.exp(2.0 * y / 3.0)
     dh = jnp.maximum(d, APPROACH_MAX)     # the asymptotic branch sees D >= D_max only
     e_hi = dh - float(tab["offset_hi"]) * (dh / APPROACH_MAX) ** float(tab["power_hi"])

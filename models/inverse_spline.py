@@ -28,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
 
-from ._math import knot_cell
+from ._math import graded_cell, horner_rows
 
 __all__ = ["solve_increasing", "build", "evaluate"]
 
@@ -97,16 +97,11 @@ def evaluate(table: dict[str, np.ndarray], s: ArrayLike) -> jnp.ndarray:
     spline, so gradients stay finite."""
     s = jnp.asarray(s, float)
     lo, hi = (float(v) for v in table["s_range"])
-    coef = jnp.asarray(table["coef"])
-    n = coef.shape[1]
+    n = int(np.shape(table["coef"])[1])
     h = (hi - lo) / n
     sc = jnp.where(s < lo, lo, jnp.where(s > hi, hi, s))
-    knots = lo + h * np.arange(n + 1)
-    i, ds = knot_cell(knots, sc, (sc - lo) / h)
-    c = coef[:, i]
-    y = c[0]
-    for k in range(1, c.shape[0]):
-        y = y * ds + c[k]
+    i, ds = graded_cell(sc, (sc - lo) / h, lambda j: lo + h * j, n)
+    y = horner_rows(np.ascontiguousarray(np.asarray(table["coef"]).T), i, ds)
     (g_lo, g_hi), (d_lo, d_hi) = table["end_values"], table["end_slopes"]
     return jnp.where(s < lo, float(g_lo) + float(d_lo) * (s - lo),
                      jnp.where(s > hi, float(g_hi) + float(d_hi) * (s - hi), y))

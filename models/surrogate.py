@@ -40,11 +40,14 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from . import p_cells
+from . import chebyshev, p_cells, scalar_shape
 from ._math import materialize
 
 __all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
            "chebyshev_basis", "kink_amplitude", "to_chebyshev", "spline_coefficients"]
+
+chebyshev_basis = chebyshev.basis
+"""T_0..T_{m-1}(nu) (:func:`models.chebyshev.basis`; kept under this name)."""
 
 X_MAX = 2.0
 """The largest x = delta_a/delta0 [-] every backbone table covers (the bead flies over
@@ -191,26 +194,11 @@ def _piece(table, p):
     return k, (2.0 * p - (lo + hi)) / (hi - lo), jnp.asarray(table["xc_cheb"])[k]
 
 
-def chebyshev_basis(nu: jnp.ndarray, m: int) -> jnp.ndarray:
-    """T_0..T_{m-1}(nu) by the three-term recurrence (smooth at nu = +-1, unlike arccos)."""
-    t = [jnp.ones_like(nu), nu]
-    for _ in range(m - 2):
-        t.append(2.0 * nu * t[-1] - t[-2])
-    return jnp.stack(t[:m], axis=-1)
-
-
 def _cell_eval(coef, i, d, basis, piece=None):
-    # basis (m,) when p is one scalar (the sampler's case): the Chebyshev sum is taken once
-    # per knot before the per-point gather, ~100x cheaper under vmap than (4, points, m)
-    coef = jnp.asarray(coef)
-    i = materialize(i)
-    piece = None if piece is None else materialize(piece)
-    if piece is not None and basis.ndim == 1:
-        c = (coef[piece] @ basis)[:, i]
-    elif piece is not None:
-        c = jnp.einsum("...km,...m->k...", coef[piece, :, i, :], basis)
-    elif basis.ndim == 1:
-        c = (coef @ basis)[:, i]
+    """S's cubic in d at cell i, the Chebyshev sums in p taken per point (basis (..., m))."""
+    coef, i = jnp.asarray(coef), materialize(i)
+    if piece is not None:
+        c = jnp.einsum("...km,...m->k...", coef[materialize(piece), :, i, :], basis)
     else:
         c = jnp.einsum("k...m,...m->k...", coef[:, i, :], basis)
     return ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
@@ -221,9 +209,9 @@ def kink_amplitude(table: dict[str, np.ndarray], p: jnp.ndarray, p_lo: float,
     """x_c(p) from its Chebyshev interpolant (p_lo, p_hi: the range of an unpieced table)."""
     if "p_edges" not in table:
         nu = (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo)
-        return chebyshev_basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
+        return chebyshev.basis(nu, table["xc_cheb"].size) @ jnp.asarray(table["xc_cheb"])
     _, nu, xc_cheb = _piece(table, jnp.asarray(p, float))
-    return jnp.sum(chebyshev_basis(nu, xc_cheb.shape[-1]) * xc_cheb, axis=-1)
+    return jnp.sum(chebyshev.basis(nu, xc_cheb.shape[-1]) * xc_cheb, axis=-1)
 
 
 def within_amplitude(x: jnp.ndarray, x_max: float = X_MAX) -> jnp.ndarray:
@@ -244,16 +232,24 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
     if "p_cells" in table:
         # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)
-    if jnp.ndim(ps) > 0:
-        xs, ps = jnp.broadcast_arrays(xs, ps)
+    pre = 1.0 if prefactor is None else prefactor(ps)
     piece, nu, xc_cheb = _piece(table, ps)
-    basis = chebyshev_basis(nu, jnp.shape(xc_cheb)[-1])
-    xc = (basis @ jnp.asarray(xc_cheb) if piece is None
-          else jnp.sum(basis * jnp.asarray(xc_cheb), axis=-1))
+    if jnp.ndim(ps) == 0:
+        # one shape for all points (the sampler's case): the Chebyshev sums once per knot,
+        # each knot's 4 coefficients contiguous (cells, 4, m), transposed as a constant (a
+        # transpose after the sum is fused into the gather, which then recomputes the sum
+        # per point); derivatives by hand (models.scalar_shape)
+        rows = jnp.asarray(np.swapaxes(p_cells.both_regions(table), -3, -2))
+        if piece is not None:
+            rows = rows[materialize(piece)]
+        return scalar_shape.evaluate(table, rows, jnp.asarray(xc_cheb), xs, nu, pre)
+    xs, ps = jnp.broadcast_arrays(xs, ps)
+    piece, nu, xc_cheb = _piece(table, ps)
+    basis = chebyshev.basis(nu, jnp.shape(xc_cheb)[-1])
+    xc = jnp.sum(basis * jnp.asarray(xc_cheb), axis=-1)
     # one gather from the contact and flight cells side by side, not one per region: on
     # the CPU the per-point gathers are most of a table's cost (a law whose shape
     # parameter differs per protocol: 110 -> 75 us for 454 points, value and gradient)
     inside, i, d = p_cells.amplitude_cell(table, xs, xc)
     y = _cell_eval(p_cells.both_regions(table), i, d, basis, piece)
-    pre = 1.0 if prefactor is None else prefactor(ps)
     return jnp.where(inside, pre * xs**2 * y, y)
