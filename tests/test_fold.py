@@ -1,0 +1,111 @@
+"""The fold of a sweep curve in its one shape parameter (inference.fold) against the exact
+curve it stands in for, its refusals, and its fallback where a cubic would miss."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from numpyro.infer.util import log_density
+
+from inference import fold as F
+from inference.likelihood import model_inputs
+from inference.numpyro_models import ModelSpec, SweepCurve, build_model, sweep_fold
+from inference.priors import law_prior
+from models.registry import get_law, law_names
+from workflows.config import DEFAULTS
+from workflows.pipeline import load_data
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    return model_inputs(load_data(DEFAULTS))
+
+
+def _backbone_laws():
+    return [n for n in law_names() if "backbone" in get_law(n).shifts]
+
+
+@pytest.mark.parametrize("name", _backbone_laws())
+def test_fold_matches_the_exact_curve(name, inputs):
+    """Wherever the fold is used its curve is the exact one to TOL; a law whose curve
+    depends on no parameter, or on several, is not folded."""
+    law = get_law(name)
+    spec = ModelSpec(law=name, rung="backbone")
+    sweeps = SweepCurve(law, spec, inputs, inputs["f0"])
+    fold = sweep_fold(sweeps, inputs)
+    priors = {p.name: law_prior(p, {}) for p in law.params}
+    base = {k: d.icdf(jnp.asarray(0.5)) for k, d in priors.items()}
+    if fold is None:
+        # then the exact curve truly does not depend on exactly one parameter
+        assert F.shape_parameter(sweeps.of_theta, [base]) is None
+        return
+    def both(zz):
+        theta = {**base, fold.param: jnp.exp(zz)}
+        return (F.evaluate(fold, theta, sweeps.of_theta), sweeps.of_theta(theta),
+                sweeps.counted(theta))
+
+    rng = np.random.default_rng(3)
+    top = fold.z_lo + fold.cells * fold.width
+    z = np.concatenate([rng.uniform(fold.z_lo, top, 60), [fold.z_lo - 0.5, top + 0.5]])
+    got, want, counted = (np.asarray(a) for a in jax.jit(jax.vmap(both))(jnp.asarray(z)))
+    miss = np.max(np.abs(got - want), axis=1)
+    assert np.all(miss[:-2][counted[:-2]] <= F.TOL)
+    # outside the folded range the exact curve (to rounding: XLA may fuse the two
+    # evaluations differently)
+    assert np.all(miss[-2:] <= 1e-12)
+
+
+@pytest.mark.parametrize("name", ["jkr", "greenwood_williamson"])
+def test_folded_model_has_the_exact_log_density(name, inputs):
+    """The model's log joint with and without the fold at prior draws: the difference is
+    bounded by TOL times the sum of |residual|/sigma^2 (here well below 1e-3 nat)."""
+    law = get_law(name)
+    folded = build_model(ModelSpec(law=name, rung="backbone"))
+    exact = build_model(ModelSpec(law=name, rung="backbone", fold=False))
+    priors = {p.name: law_prior(p, {}) for p in law.params}
+    rng = np.random.default_rng(5)
+    compared = 0
+    for _ in range(12):
+        params = {k: float(d.icdf(jnp.asarray(rng.uniform(0.05, 0.95))))
+                  for k, d in priors.items()}
+        params.update(delta0_scatter=0.1, sigma_shift=0.0137, offset_down=0.0,
+                      mu_logq=np.log(50.0), tau_logq=0.5)
+        a, _ = log_density(folded, (inputs,), {}, params)
+        b, _ = log_density(exact, (inputs,), {}, params)
+        assert np.isfinite(a) == np.isfinite(b)
+        if np.isfinite(b):
+            compared += 1
+            assert abs(float(a) - float(b)) < 1e-3
+    assert compared >= 6
+
+
+def test_shape_parameter_sees_every_dependence():
+    x = jnp.linspace(0.1, 1.0, 7)
+    one = lambda th: th["a"] * x**2 + 0.0 * th["b"]  # noqa: E731
+    two = lambda th: th["a"] * x**2 + th["b"] * x  # noqa: E731
+    none = lambda th: x**2  # noqa: E731
+    draws = [{"a": jnp.asarray(1.3), "b": jnp.asarray(0.7)}]
+    assert F.shape_parameter(one, draws) == "a"
+    assert F.shape_parameter(two, draws) is None
+    assert F.shape_parameter(none, draws) is None
+
+
+def test_a_kink_is_refined_or_left_to_the_exact_curve():
+    """A curve with a slope jump in ln theta (a cubic cannot follow it): every value the
+    fold returns, in refined, unusable and ordinary cells alike, is the exact one to TOL."""
+    x = jnp.linspace(0.0, 1.0, 5)
+
+    def curve(th):
+        z = jnp.log(th["a"])
+        return 0.1 * x * jnp.abs(z - 0.3123) + 0.01 * jnp.sin(3.0 * z) * x
+
+    fold = F.build_fold(curve, {"a": jnp.asarray(1.0)}, "a", 0.1, 10.0)
+    assert fold is not None and np.any(fold.count > 1)
+    def miss(zz):
+        th = {"a": jnp.exp(zz)}
+        return jnp.max(jnp.abs(F.evaluate(fold, th, curve) - curve(th)))
+
+    z = np.linspace(np.log(0.1) + 1e-9, np.log(10.0) - 1e-9, 2001)
+    assert float(jnp.max(jax.jit(jax.vmap(miss))(jnp.asarray(z)))) <= F.TOL
