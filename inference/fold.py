@@ -36,7 +36,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter", "evaluate"]
+from models.p_cells import cubic, hermite
+
+__all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter", "evaluate",
+           "quantiles", "cached", "is_concrete"]
 
 CELLS = 256
 """Cells along z = ln theta over the folded range."""
@@ -53,7 +56,7 @@ class Fold:
     """Per-point cubics of the sweep curve in z = ln theta on ``CELLS`` equal base cells
     from ``z_lo`` (width ``width``), base cell j cut into ``count[j]`` equal sub-cells
     (``REFINE`` where one cubic missed ``TOL``), stored flat from ``offset[j]``:
-    ``coef`` (sub-cells, 4, points), powers of (z - z_k) highest first; ``usable``
+    ``coef`` (sub-cells, points, 4), powers of (z - z_k) highest first; ``usable``
     (sub-cells,) bool; ``max_error`` [-] the largest checked error of the usable ones."""
 
     param: str
@@ -125,13 +128,10 @@ def build_fold(curve: Callable[[dict], jnp.ndarray], theta: dict, param: str,
         f, d, _ = probe(nodes)
         fc, _, ok = probe(checks)
         n = starts.size
-        f0, f1, d0, d1 = f[:n], f[n:], d[:n], d[n:]
-        sl = (f1 - f0) / w
-        coef = np.stack([(d0 + d1 - 2.0 * sl) / w**2, (3.0 * sl - 2.0 * d0 - d1) / w, d0, f0],
-                        1)
+        coef = hermite(f[:n], f[n:], d[:n], d[n:], w)          # (cells, points, 4)
         err = np.zeros(n)
         for m, c in enumerate(_CHECKS):
-            miss = np.max(np.abs(_cubic(coef, c * w) - fc[m * n:(m + 1) * n]), axis=1)
+            miss = np.max(np.abs(cubic(coef, c * w) - fc[m * n:(m + 1) * n]), axis=1)
             err = np.maximum(err, np.where(ok[m * n:(m + 1) * n], miss, 0.0))
         finite = np.all(np.isfinite(coef), axis=(1, 2))
         return coef, np.where(finite, err, np.inf)
@@ -162,10 +162,6 @@ def build_fold(curve: Callable[[dict], jnp.ndarray], theta: dict, param: str,
                 usable, float(np.max(err[usable])))
 
 
-def _cubic(c, t):
-    return ((c[:, 0] * t + c[:, 1]) * t + c[:, 2]) * t + c[:, 3]
-
-
 def evaluate(fold: Fold, theta: dict, exact: Callable[[dict], jnp.ndarray]) -> jnp.ndarray:
     """The curve at ``theta``: the fold's cell where it is usable, else ``exact(theta)``."""
     z = jnp.log(jnp.asarray(theta[fold.param], float))
@@ -180,8 +176,8 @@ def evaluate(fold: Fold, theta: dict, exact: Callable[[dict], jnp.ndarray]) -> j
 
     def folded(theta):
         t = jnp.log(theta[fold.param]) - (start + w * k.astype(float))
-        c = jax.lax.dynamic_index_in_dim(jnp.asarray(fold.coef), flat, 0, keepdims=False)
-        return ((c[0] * t + c[1]) * t + c[2]) * t + c[3]
+        return cubic(jax.lax.dynamic_index_in_dim(jnp.asarray(fold.coef), flat, 0,
+                                                  keepdims=False), t)
 
     # under vmap lax.cond runs both branches (still correct); NUTS takes one
     return jax.lax.cond(use, folded, exact, theta)
@@ -207,6 +203,16 @@ def cached(key_parts: tuple, make: Callable[[], Fold | None]) -> Fold | None:
         while len(_CACHE) > _CACHE_SIZE:
             _CACHE.popitem(last=False)
     return _CACHE[key]
+
+
+def quantiles(d: Any, qs: tuple[float, ...]) -> list | None:
+    """The quantiles ``qs`` of the numpyro distribution ``d``, or None when its class has
+    no quantile function (then the fold has no range to cover and is not built)."""
+    import numpyro.distributions as dist
+
+    if type(d).icdf is dist.Distribution.icdf:
+        return None
+    return [d.icdf(jnp.asarray(q)) for q in qs]
 
 
 def is_concrete(*arrays: Any) -> bool:

@@ -84,7 +84,7 @@ from models.registry import FIT_RUNGS, get_law, law_names
 
 from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
 from .fold import TAIL as FOLD_TAIL
-from .fold import build_fold, cached, is_concrete, shape_parameter
+from .fold import build_fold, cached, is_concrete, quantiles, shape_parameter
 from .fold import evaluate as fold_eval
 from .likelihood import SWEEP_LAYOUT_KEYS, observe_logq, sweep_layout
 from .overlap import MeasuredF0, invert_log_overlap, log_overlap
@@ -229,15 +229,14 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
         sweeps = SweepCurve(law, spec, data, f0)
         x, per = sweeps.grid(kw, delta0)
         fold = sweep_fold(sweeps, data) if spec.fold else None
-        curve = (sweeps.of_theta(theta) if fold is None
+        curve = (sweeps.curve(x, per) if fold is None
                  else fold_eval(fold, theta, sweeps.of_theta))
-        inside = law.in_domain(x, rung=spec.rung, **per)
+        inside = sweeps.inside(x, per)
         if inside is not None:
             # outside its domain the fast path holds a value that is not the law's: such
             # a point gets zero likelihood rather than a silently wrong one (the prior
             # is in effect truncated to the domain; log Z counts only the mass inside)
-            numpyro.factor("law_domain",
-                           jnp.where(jnp.all(inside | ~sweeps.valid), 0.0, -jnp.inf))
+            numpyro.factor("law_domain", jnp.where(inside, 0.0, -jnp.inf))
         observe_drive(spec, curve, data)
     if spec.use_q:
         if law.predicts_q:
@@ -263,19 +262,28 @@ class SweepCurve:
                       0.5)
         return x, {"delta0": delta0[:, None], "omega0": 2.0 * jnp.pi * self.f0[:, None], **kw}
 
-    def of_theta(self, theta: dict):
-        """Delta f/f0 at every observed sweep (the data's order) for law parameters theta."""
-        kw = self.law.resolve(self.data["scene"], theta)
-        x, per = self.grid(kw, jnp.exp(log_overlap(self.law.name, self.f0, kw)))
+    def curve(self, x, per: dict):
+        """Delta f/f0 at every observed sweep (the data's order), from :meth:`grid`."""
         return jnp.reshape(self.law.shift(x, rung=self.spec.rung, **per), -1)[self.position]
+
+    def inside(self, x, per: dict):
+        """True where every observed sweep is inside the law's domain (None: no domain)."""
+        inside = self.law.in_domain(x, rung=self.spec.rung, **per)
+        return None if inside is None else jnp.all(inside | ~self.valid)
+
+    def _at(self, theta: dict) -> tuple[Any, dict]:
+        kw = self.law.resolve(self.data["scene"], theta)
+        return self.grid(kw, jnp.exp(log_overlap(self.law.name, self.f0, kw)))
+
+    def of_theta(self, theta: dict):
+        """:meth:`curve` for law parameters theta."""
+        return self.curve(*self._at(theta))
 
     def counted(self, theta: dict):
         """True where theta puts every sweep inside the law's domain (else the model gives
         zero likelihood, whatever the curve)."""
-        kw = self.law.resolve(self.data["scene"], theta)
-        x, per = self.grid(kw, jnp.exp(log_overlap(self.law.name, self.f0, kw)))
-        inside = self.law.in_domain(x, rung=self.spec.rung, **per)
-        return jnp.asarray(True) if inside is None else jnp.all(inside | ~self.valid)
+        inside = self.inside(*self._at(theta))
+        return jnp.asarray(True) if inside is None else inside
 
 
 def sweep_fold(sweeps: SweepCurve, data: dict):
@@ -288,19 +296,17 @@ def sweep_fold(sweeps: SweepCurve, data: dict):
 
     def make():
         with jax.ensure_compile_time_eval():
-            try:
-                draws = [{k: d.icdf(jnp.asarray(q)) for k, d in priors.items()}
-                         for q in (0.37, 0.71)]
-                ends = {k: [d.icdf(jnp.asarray(q)) for q in (FOLD_TAIL, 1.0 - FOLD_TAIL)]
-                        for k, d in priors.items()}
-            except NotImplementedError:   # a prior without a quantile function
-                return None
-            if not is_concrete(*jax.tree_util.tree_leaves((draws, ends))):
+            q = {k: quantiles(d, (0.37, 0.71, FOLD_TAIL, 1.0 - FOLD_TAIL))
+                 for k, d in priors.items()}
+            if any(v is None for v in q.values()):
+                return None               # a prior without a quantile function
+            if not is_concrete(*jax.tree_util.tree_leaves(q)):
                 return None               # a prior whose parameters are traced
+            draws = [{k: v[i] for k, v in q.items()} for i in (0, 1)]
             name = shape_parameter(sweeps.of_theta, draws)
             if name is None:
                 return None
-            lo, hi = (float(v) for v in ends[name])
+            lo, hi = (float(v) for v in q[name][2:])
             return build_fold(sweeps.of_theta, draws[0], name, lo, hi,
                               counted=sweeps.counted)
 

@@ -31,6 +31,7 @@ from numpy.polynomial import chebyshev as cheb
 from ._math import graded_cell, materialize
 
 __all__ = ["both_regions", "resample", "evaluate", "amplitude_cell", "cubic",
+           "contact_knot", "flight_knot", "hermite",
            "cubic_slope", "value_and_tangent"]
 
 _KEY = "_p_cells_resampled"   # where the resampled arrays are kept, in the loaded table
@@ -41,11 +42,28 @@ def both_regions(table: dict[str, np.ndarray]) -> np.ndarray:
     return np.concatenate([table["coef_contact"], table["coef_flight"]], axis=-2)
 
 
-def _hermite(values: np.ndarray, slopes: np.ndarray, h: float) -> np.ndarray:
-    # cells along axis 0 (n + 1 nodes -> n cells); powers of (p - p_j), highest first
-    f0, f1, d0, d1 = values[:-1], values[1:], slopes[:-1], slopes[1:]
+def contact_knot(s):
+    """Contact-region knot u [-] at fractional position s in [0, 1]: 1 - (1 - s)^2 (graded
+    towards the kink u = 1). One definition for the builder and the lookup."""
+    return 1.0 - (1.0 - s) ** 2
+
+
+def flight_knot(s):
+    """Flight-region knot v [-] at fractional position s in [0, 1]: s^2 (graded towards
+    the kink v = 0)."""
+    return s**2
+
+
+def hermite(f0, f1, d0, d1, h):
+    """Cubic Hermite piece on [0, h] from end values f0, f1 and slopes d0, d1: its power
+    coefficients in the offset from 0, highest first, stacked on a new last axis."""
     s = (f1 - f0) / h
     return np.stack([(d0 + d1 - 2.0 * s) / h**2, (3.0 * s - 2.0 * d0 - d1) / h, d0, f0], -1)
+
+
+def _hermite(values: np.ndarray, slopes: np.ndarray, h: float) -> np.ndarray:
+    # cells along axis 0 (n + 1 nodes -> n cells)
+    return hermite(values[:-1], values[1:], slopes[:-1], slopes[1:], h)
 
 
 def resample(table: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -137,19 +155,20 @@ def amplitude_cell(table: dict[str, np.ndarray], xs: jnp.ndarray,
     cells (u = x/x_c, inside = x <= x_c) first and the flight cells (v = (x - x_c)/(x_max -
     x_c)) after them, as :func:`both_regions` stores them, so one gather reads either.
 
-    The knots are located from their grading's closed form (u_i = 1 - (1 - i/k)^2, v_i =
-    (i/k)^2, checked against the stored knots), not read from the knot arrays
+    The knots are located from their grading's closed form (:func:`contact_knot`,
+    :func:`flight_knot`, checked against the stored knots), not read from the knot arrays
     (:func:`models._math.graded_cell`: ~6.6 -> 2.6 us for 672 points)."""
     x_max = float(table["x_max"])
     uk, vk = np.asarray(table["u_knots"]), np.asarray(table["v_knots"])
-    _check_grading(uk, lambda s: 1.0 - (1.0 - s) ** 2, "u knots")
-    _check_grading(vk, lambda s: s**2, "v knots")
+    _check_grading(uk, contact_knot, "u knots")
+    _check_grading(vk, flight_knot, "v knots")
     ku, kv = uk.size - 1, vk.size - 1
     u = xs / xc
     v = (xs - xc) / (x_max - xc)
     iu, du = graded_cell(u, ku * (1.0 - jnp.sqrt(jnp.clip(1.0 - u, 0.0, 1.0))),
-                         lambda i: 1.0 - (1.0 - i / ku) ** 2, ku)
-    iv, dv = graded_cell(v, kv * jnp.sqrt(jnp.clip(v, 0.0, 1.0)), lambda i: (i / kv) ** 2, kv)
+                         lambda i: contact_knot(i / ku), ku)
+    iv, dv = graded_cell(v, kv * jnp.sqrt(jnp.clip(v, 0.0, 1.0)), lambda i: flight_knot(i / kv),
+                         kv)
     inside = xs <= xc
     return inside, jnp.where(inside, iu, iv + ku), jnp.where(inside, du, dv)
 

@@ -87,7 +87,7 @@ def chebyshev_nodes(spec: BackboneSpec) -> tuple[np.ndarray, np.ndarray]:
 
 def _knots(k: int) -> tuple[np.ndarray, np.ndarray]:
     s = np.linspace(0.0, 1.0, k)
-    return 1.0 - (1.0 - s) ** 2, s**2
+    return p_cells.contact_knot(s), p_cells.flight_knot(s)
 
 
 def to_chebyshev(values: np.ndarray, nu: np.ndarray) -> np.ndarray:
@@ -233,8 +233,8 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
         # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)
     pre = 1.0 if prefactor is None else prefactor(ps)
-    piece, nu, xc_cheb = _piece(table, ps)
     if jnp.ndim(ps) == 0:
+        piece, nu, xc_cheb = _piece(table, ps)
         # one shape for all points (the sampler's case): the Chebyshev sums once per knot,
         # each knot's 4 coefficients contiguous (cells, 4, m), transposed as a constant (a
         # transpose after the sum is fused into the gather, which then recomputes the sum
