@@ -9,8 +9,19 @@ Hertz's and the viscoelastic law's on none (XLA then folds the curve when it com
 Before sampling, the curve is therefore tabulated once along that parameter: in
 z = ln theta, ``CELLS`` equal cells over the prior's central 1 - 2e-12, a cubic Hermite
 piece per cell and point from the exact values and z-derivatives at the cell ends. A
-step then reads one cell (4 numbers per point, one contiguous slice) instead of locating
-every point in a two-dimensional table, which on the CPU cost 4-10 times more.
+step then reads one cell (4 numbers per point, four contiguous row slices) instead of
+locating every point in a two-dimensional table, which on the CPU cost 4-10 times more.
+(:mod:`inference.steps` folds the per-protocol overlap map with the curve, where it
+depends on the same parameter.)
+
+Cost. Two details decide it on the CPU (one-core value + gradient of JKR's model on the
+embedded data, 454 sweeps: 11.2 us before both, 3.8 after; Hertz 2.0): the coefficients
+are kept as four (cells, points) arrays, one row slice each (a slice of one
+(cells, points, 4) array read with stride 4 cost 5x more), and the derivative in z is a
+rule of its own (``custom_jvp``) that returns the cubic's slope from inside the
+``lax.cond``: differentiated through, the cond makes the forward pass carry the
+residuals of both branches (the exact curve's intermediates, zeros when the fold is
+taken) every step.
 
 Honesty. The fold is checked where it is built: in every cell at z = 1/4, 1/2 and 3/4 of
 its width against the exact curve. A cell whose error exceeds ``TOL`` (1e-7 in
@@ -30,13 +41,14 @@ import hashlib
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from models.p_cells import cubic, hermite
+from models.p_cells import cubic, cubic_slope, hermite
 
 __all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter", "evaluate",
            "quantiles", "cached", "is_concrete"]
@@ -163,8 +175,17 @@ def build_fold(curve: Callable[[dict], jnp.ndarray], theta: dict, param: str,
 
 
 def evaluate(fold: Fold, theta: dict, exact: Callable[[dict], jnp.ndarray]) -> jnp.ndarray:
-    """The curve at ``theta``: the fold's cell where it is usable, else ``exact(theta)``."""
+    """The curve at ``theta``: the fold's cell where it is usable, else ``exact(theta)``.
+
+    Differentiable in ``fold.param`` only: the other parameters are passed through to
+    ``exact`` but get no derivative, as the fold presumes (:func:`shape_parameter`)."""
     z = jnp.log(jnp.asarray(theta[fold.param], float))
+    others = {k: v for k, v in theta.items() if k != fold.param}
+    return _evaluate(fold, exact, z, others)
+
+
+def _locate(fold: Fold, z):
+    # (flat sub-cell index, offset of z in it, usable?)
     pos = (z - fold.z_lo) / fold.width
     j = jnp.clip(jnp.floor(jnp.nan_to_num(pos)).astype(jnp.int32), 0, fold.cells - 1)
     n = jnp.asarray(fold.count)[j]
@@ -173,14 +194,44 @@ def evaluate(fold: Fold, theta: dict, exact: Callable[[dict], jnp.ndarray]) -> j
     k = jnp.clip(jnp.floor(jnp.nan_to_num((z - start) / w)).astype(jnp.int32), 0, n - 1)
     flat = jnp.asarray(fold.offset)[j] + k
     use = (pos >= 0.0) & (pos < fold.cells) & jnp.asarray(fold.usable)[flat]
+    return flat, z - (start + w * k.astype(float)), use
 
-    def folded(theta):
-        t = jnp.log(theta[fold.param]) - (start + w * k.astype(float))
-        return cubic(jax.lax.dynamic_index_in_dim(jnp.asarray(fold.coef), flat, 0,
-                                                  keepdims=False), t)
+
+def _rows(fold: Fold, flat):
+    # the sub-cell's four coefficient rows, one slice of each (cells, points) array: on
+    # the CPU one slice of the (cells, points, 4) array, then strided reads, cost 5x more
+    return [jax.lax.dynamic_index_in_dim(jnp.asarray(fold.coef[..., m]), flat, 0,
+                                         keepdims=False) for m in range(4)]
+
+
+def _value(fold, exact, z, others, slope: bool):
+    flat, t, use = _locate(fold, z)
+
+    def folded(z, others):
+        c = jnp.stack(_rows(fold, flat), axis=-1)
+        return (cubic(c, t), cubic_slope(c, t)) if slope else cubic(c, t)
+
+    def direct(z, others):
+        f = lambda zz: exact({**others, fold.param: jnp.exp(zz)})  # noqa: E731
+        return jax.jvp(f, (z,), (jnp.ones_like(z),)) if slope else f(z)
 
     # under vmap lax.cond runs both branches (still correct); NUTS takes one
-    return jax.lax.cond(use, folded, exact, theta)
+    return jax.lax.cond(use, folded, direct, z, others)
+
+
+@partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def _evaluate(fold, exact, z, others):
+    return _value(fold, exact, z, others, slope=False)
+
+
+@_evaluate.defjvp
+def _evaluate_jvp(fold, exact, primals, tangents):
+    # Why a custom rule: differentiating through lax.cond makes the forward pass carry
+    # the residuals of both branches (the exact curve's many intermediates, zeros when
+    # the fold is taken); here the cond returns the value and its z-slope, nothing else.
+    z, others = primals
+    value, slope = _value(fold, exact, z, others, slope=True)
+    return value, slope * tangents[0]
 
 
 _CACHE: OrderedDict[str, Fold | None] = OrderedDict()

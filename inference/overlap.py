@@ -24,7 +24,7 @@ from numpyro.distributions.util import promote_shapes
 
 from models.registry import get_law
 
-__all__ = ["log_overlap", "invert_log_overlap", "MeasuredF0"]
+__all__ = ["log_overlap", "log_overlap_and_slope", "invert_log_overlap", "MeasuredF0"]
 
 
 def log_overlap(law: str, f0: jnp.ndarray, kw: dict[str, Any]) -> jnp.ndarray:
@@ -33,10 +33,13 @@ def log_overlap(law: str, f0: jnp.ndarray, kw: dict[str, Any]) -> jnp.ndarray:
     return jnp.log(get_law(law).overlap_at(f0, **kw))
 
 
-def _log_overlap_and_slope(law, f0, kw):
-    # d log delta0 / d f0 elementwise: one forward-mode pass with unit tangents
+def log_overlap_and_slope(law: str, f0: jnp.ndarray,
+                          kw: dict[str, Any]) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(log delta0, log |d log delta0 / d f0| [log(1/Hz)]) at the measured f0 [Hz],
+    elementwise: one forward-mode pass with unit tangents."""
     f0 = jnp.asarray(f0, dtype=float)
-    return jax.jvp(lambda f: log_overlap(law, f, kw), (f0,), (jnp.ones_like(f0),))
+    logd, slope = jax.jvp(lambda f: log_overlap(law, f, kw), (f0,), (jnp.ones_like(f0),))
+    return logd, jnp.log(jnp.abs(slope))
 
 
 def invert_log_overlap(law: str, target: Any, kw: dict[str, Any]) -> jnp.ndarray:
@@ -53,17 +56,21 @@ class MeasuredF0(dist.Distribution):
 
     Sampling draws log delta0 ~ Normal(log_ref, scatter) and inverts the map. ``law`` is
     a registry name (static); ``kw`` the resolved keywords (law parameters, scene).
+    ``known = (f0, log delta0, log |d log delta0/d f0|)``: the map already evaluated at
+    the observed f0 (by the model's fold, :mod:`inference.steps`); ``log_prob`` uses it
+    when its value is that f0, and evaluates the map otherwise.
     """
 
     arg_constraints = {"log_ref": constraints.real, "scatter": constraints.positive}
     support = constraints.positive
-    pytree_data_fields = ("log_ref", "scatter", "kw")
+    pytree_data_fields = ("log_ref", "scatter", "kw", "known")
     pytree_aux_fields = ("law",)
 
     def __init__(self, law: str, log_ref, scatter, kw: dict[str, Any], *,
-                 validate_args=None) -> None:
+                 known: tuple | None = None, validate_args=None) -> None:
         self.law = law
         self.kw = dict(kw)
+        self.known = known
         self.log_ref, self.scatter = promote_shapes(jnp.asarray(log_ref, float),
                                                     jnp.asarray(scatter, float))
         batch = jax.lax.broadcast_shapes(jnp.shape(self.log_ref), jnp.shape(self.scatter))
@@ -75,6 +82,15 @@ class MeasuredF0(dist.Distribution):
         return invert_log_overlap(self.law, z, self.kw)
 
     def log_prob(self, value):
-        logd, slope = _log_overlap_and_slope(self.law, value, self.kw)
-        return (dist.Normal(self.log_ref, self.scatter).log_prob(logd)
-                + jnp.log(jnp.abs(slope)))
+        def evaluated(v):
+            logd, log_slope = log_overlap_and_slope(self.law, v, self.kw)
+            return jnp.broadcast_to(logd, jnp.shape(v)), jnp.broadcast_to(log_slope,
+                                                                         jnp.shape(v))
+
+        if self.known is None or jnp.shape(value) != jnp.shape(self.known[0]):
+            logd, log_slope = evaluated(value)
+        else:
+            f0, logd, log_slope = self.known
+            logd, log_slope = jax.lax.cond(jnp.all(value == f0), lambda v: (logd, log_slope),
+                                           evaluated, value)
+        return dist.Normal(self.log_ref, self.scatter).log_prob(logd) + log_slope

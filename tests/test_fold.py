@@ -11,7 +11,7 @@ from numpyro.infer.util import log_density
 
 from inference import fold as F
 from inference.likelihood import model_inputs
-from inference.numpyro_models import ModelSpec, SweepCurve, build_model, sweep_fold
+from inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
 from inference.priors import law_prior
 from models.registry import get_law, law_names
 from workflows.config import DEFAULTS
@@ -28,42 +28,64 @@ def _backbone_laws():
 
 
 @pytest.mark.parametrize("name", _backbone_laws())
-def test_fold_matches_the_exact_curve(name, inputs):
-    """Wherever the fold is used its curve is the exact one to TOL; a law whose curve
-    depends on no parameter, or on several, is not folded."""
+def test_fold_matches_the_exact_quantities(name, inputs):
+    """Wherever the fold is used its values (the sweep curve, and the overlap map with its
+    log-Jacobian where folded with it) are the exact ones to TOL; a law whose curve depends
+    on no parameter, or on several, is not folded; the overlap map is folded exactly when
+    it depends on the curve's one parameter."""
     law = get_law(name)
     spec = ModelSpec(law=name, rung="backbone")
     sweeps = SweepCurve(law, spec, inputs, inputs["f0"])
-    fold = sweep_fold(sweeps, inputs)
+    step = step_fold(sweeps, inputs)
     priors = {p.name: law_prior(p, {}) for p in law.params}
     base = {k: d.icdf(jnp.asarray(0.5)) for k, d in priors.items()}
-    if fold is None:
+    if step is None:
         # then the exact curve truly does not depend on exactly one parameter
         assert F.shape_parameter(sweeps.of_theta, [base]) is None
         return
+    fold = step.fold
+    assert step.with_protocols == (F.shape_parameter(sweeps.everything, [base]) == fold.param)
+    exact = sweeps.everything if step.with_protocols else sweeps.of_theta
+
     def both(zz):
         theta = {**base, fold.param: jnp.exp(zz)}
-        return (F.evaluate(fold, theta, sweeps.of_theta), sweeps.of_theta(theta),
-                sweeps.counted(theta))
+        return F.evaluate(fold, theta, exact), exact(theta), sweeps.counted(theta)
 
     rng = np.random.default_rng(3)
     top = fold.z_lo + fold.cells * fold.width
     z = np.concatenate([rng.uniform(fold.z_lo, top, 60), [fold.z_lo - 0.5, top + 0.5]])
     got, want, counted = (np.asarray(a) for a in jax.jit(jax.vmap(both))(jnp.asarray(z)))
+    assert got.shape[1] == inputs["shift"].size + 2 * step.with_protocols * inputs["f0"].size
     miss = np.max(np.abs(got - want), axis=1)
     assert np.all(miss[:-2][counted[:-2]] <= F.TOL)
-    # outside the folded range the exact curve (to rounding: XLA may fuse the two
+    # outside the folded range the exact values (to rounding: XLA may fuse the two
     # evaluations differently)
     assert np.all(miss[-2:] <= 1e-12)
+    # its derivative (a rule of its own, inference.fold._evaluate) is the exact one's to
+    # the cubics' accuracy, in forward and reverse mode alike
+    zs = jnp.asarray(z[:20])
+
+    def fold_z(zz):
+        return F.evaluate(fold, {**base, fold.param: jnp.exp(zz)}, exact)
+
+    fwd = np.asarray(jax.jit(jax.vmap(jax.jacfwd(fold_z)))(zs))
+    rev = np.asarray(jax.jit(jax.vmap(jax.jacrev(fold_z)))(zs))
+    ref = np.asarray(jax.jit(jax.vmap(jax.jacfwd(
+        lambda zz: exact({**base, fold.param: jnp.exp(zz)}))))(zs))
+    assert np.allclose(fwd, rev, rtol=0, atol=1e-12)
+    assert np.max(np.abs(fwd - ref)[counted[:20]]) <= 1e-3 * max(1.0, np.max(np.abs(ref)))
 
 
-@pytest.mark.parametrize("name", ["jkr", "greenwood_williamson"])
-def test_folded_model_has_the_exact_log_density(name, inputs):
+@pytest.mark.parametrize("name,use_shift", [("jkr", True), ("greenwood_williamson", True),
+                                            ("powerlaw", True), ("dmt", False)])
+def test_folded_model_has_the_exact_log_density(name, use_shift, inputs):
     """The model's log joint with and without the fold at prior draws: the difference is
-    bounded by TOL times the sum of |residual|/sigma^2 (here well below 1e-3 nat)."""
+    bounded by TOL times the sum of |residual|/sigma^2 (here well below 1e-3 nat); also
+    where only the overlap map is folded (no shift observed)."""
     law = get_law(name)
-    folded = build_model(ModelSpec(law=name, rung="backbone"))
-    exact = build_model(ModelSpec(law=name, rung="backbone", fold=False))
+    folded = build_model(ModelSpec(law=name, rung="backbone", use_shift=use_shift))
+    exact = build_model(ModelSpec(law=name, rung="backbone", fold=False,
+                                  use_shift=use_shift))
     priors = {p.name: law_prior(p, {}) for p in law.params}
     rng = np.random.default_rng(5)
     compared = 0
@@ -109,3 +131,23 @@ def test_a_kink_is_refined_or_left_to_the_exact_curve():
 
     z = np.linspace(np.log(0.1) + 1e-9, np.log(10.0) - 1e-9, 2001)
     assert float(jnp.max(jax.jit(jax.vmap(miss))(jnp.asarray(z)))) <= F.TOL
+
+
+def test_known_overlap_map_is_used_only_at_its_f0():
+    """MeasuredF0 with the map precomputed at the observed f0 (the fold's values) gives
+    that density there and evaluates the map at any other value."""
+    from inference.likelihood import scene_quantities
+    from inference.overlap import MeasuredF0, log_overlap_and_slope
+    from models.scenes import builtin_scene
+
+    law = get_law("jkr")
+    kw = law.resolve(scene_quantities(builtin_scene("paper")), {"young": 200e9, "gamma": 0.7})
+    f0 = jnp.array([2500.0, 2700.0, 2950.0])
+    logd, log_slope = log_overlap_and_slope("jkr", f0, kw)
+    plain = MeasuredF0("jkr", jnp.log(55e-9), 0.1, kw)
+    # a deliberately wrong "known" map: used at its f0, ignored elsewhere
+    known = MeasuredF0("jkr", jnp.log(55e-9), 0.1, kw, known=(f0, logd + 0.01, log_slope))
+    assert np.allclose(known.log_prob(f0), plain.log_prob(f0) - (logd + 0.005 - jnp.log(55e-9))
+                       * 0.01 / 0.1**2, rtol=0, atol=1e-9)
+    other = f0 + 1.0
+    assert np.allclose(known.log_prob(other), plain.log_prob(other), rtol=0, atol=1e-12)
