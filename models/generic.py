@@ -158,7 +158,11 @@ def first_order_shift(law: Any, x: Any, *, delta0: Any, **kw: Any) -> jnp.ndarra
 
 
 def restoring_force(law: Any, *, delta0: Any, **kw: Any):
-    """(P', divided, flight acceleration) of the dimensionless oscillator (module doc)."""
+    """(P', divided, flight acceleration) of the dimensionless oscillator (module doc); the
+    law's own exact form where it gives one (:class:`models.law.ContactLaw`)."""
+    if law.restoring_force is not None:
+        return law.restoring_force(delta0=delta0, **{k: v for k, v in kw.items()
+                                                     if k != "omega0"})
     f = _force(law, kw)
     d0 = jnp.asarray(delta0, float)
     f0, k0 = jax.jvp(f, (d0,), (jnp.ones_like(d0),))
@@ -196,15 +200,22 @@ def contact_loss_turning_point(law: Any, *, delta0: Any, **kw: Any) -> jnp.ndarr
     return bisect(g, jnp.asarray(1e-9), jnp.asarray(50.0), iters=80)
 
 
+_ONSET = 1e-9   # relative offset of the contact-only orbit that stands for the onset
+_FLY = 1e-8     # relative offset of the first flying orbit the amplitude solve evaluates
+
+
 def contact_loss_onset(law: Any, *, delta0: Any, **kw: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """(x_c, Delta f/f0 at x_c) [-]: the backbone where contact loss starts, taken on the
-    orbit through qmax_c (1 + 1e-6), which flies for a flight time ~1e-3. Not at qmax_c
+    """(x_c, Delta f/f0 at x_c) [-]: the backbone where contact loss starts, the limit of
+    the contact-only orbits, taken on the one through qmax_c (1 - 1e-9). Not at qmax_c
     itself: there the contact-or-flight test and the lower turning point's bracket compare
     energies equal to within the quadrature's rounding (~1e-12), and picked the wrong branch
     (x_c alternating between 0.92 and 0.84 from one Greenwood-Williamson table node to the
-    next). S is C1 at x_c, so the shifted point only moves the split by ~1e-6."""
+    next). Not on the flight side either: where the force jumps at the contact edge (an
+    adhesive law: F(0+) < 0, 0 in flight) the flying orbits' x and Delta f/f0 move like the
+    square root of qmax - qmax_c, so an orbit 1e-6 past the onset sits 3e-4 away in x and
+    7e-4 in Delta f/f0 (JKR at F0/Fc = 0.6); the contact-only orbits move linearly."""
     qc = contact_loss_turning_point(law, delta0=delta0, **kw)
-    om, a1, _ = backbone_orbit(law, qc * (1.0 + 1e-6), delta0=delta0, **kw)
+    om, a1, _ = backbone_orbit(law, qc * (1.0 - _ONSET), delta0=delta0, **kw)
     return a1, om - 1.0
 
 
@@ -222,24 +233,50 @@ def backbone_shift(law: Any, x: Any, *, delta0: Any, nodes: int = 48,
                    **kw: Any) -> jnp.ndarray:
     """Exact backbone Delta f/f0 [-] at first-harmonic amplitude x (elementwise in x).
 
-    Newton in qmax on a1(qmax) = x from qmax = x (a1 = qmax + O(qmax^2)), then one
-    polish step, so gradients follow the implicit function theorem.
+    The orbit's amplitude a1 grows with its upper turning point qmax, linearly below the
+    onset of contact loss qmax_c and, past it, like (qmax - qmax_c)^(1/2) where the force
+    jumps at the contact edge (adhesive laws; :func:`contact_loss_onset`). So the root of
+    a1 = x is found by Newton in z with qmax = qmax_c + z below the onset (z < 0) and
+    qmax_c + z^2 past it (z > 0), where a1 is smooth on each side with finite slopes
+    (Newton in qmax from x failed there: values off by up to 0.05 within 0.02 of the onset
+    for JKR at F0/Fc = 0.6). Then one Newton step in z from the stopped-gradient root, so
+    gradients follow the implicit function theorem.
     """
     x = jnp.asarray(x, float)
     d0 = jnp.broadcast_to(jnp.asarray(delta0, float), x.shape)
 
     def one(xi, di):
-        a1 = lambda qm: backbone_orbit(law, qm, delta0=di, nodes=nodes, **kw)[1] - xi
+        orbit_at = lambda qm: backbone_orbit(law, qm, delta0=di, nodes=nodes, **kw)[:2]
+        qc = jax.lax.stop_gradient(contact_loss_turning_point(law, delta0=di, **kw))
+        # within ~1e-10 of qmax_c the contact-or-flight test compares energies equal to
+        # rounding (NaN at 1e-12): the orbits from qc (1 - 1e-9) to qc (1 + 1e-8) are
+        # bridged linearly in z, where (a1, omega) are smooth to ~1e-8 on either side
+        z_lo, z_hi = -_ONSET * qc, jnp.sqrt(_FLY * qc)
+        ends = jax.lax.stop_gradient(jnp.stack([jnp.stack(orbit_at(qc + z_lo)),
+                                                jnp.stack(orbit_at(qc + z_hi**2))]))
+        qm_of = lambda z: qc + jnp.where(z > 0.0, z * z, z)
 
-        def newton(_, q):
-            val, slope = jax.jvp(a1, (q,), (jnp.ones_like(q),))
-            return jnp.maximum(q - val / slope, 0.5 * q)
+        def state(z):   # (omega, a1)
+            bridge = (z > z_lo) & (z < z_hi)
+            far = jnp.stack(orbit_at(qm_of(jnp.where(bridge, z_hi, z))))
+            t = (z - z_lo) / (z_hi - z_lo)
+            return jnp.where(bridge, ends[0] + t * (ends[1] - ends[0]), far)
+
+        a1_z = lambda z: state(z)[1] - xi
+
+        def newton(_, z):
+            val, slope = jax.jvp(a1_z, (z,), (jnp.ones_like(z),))
+            step = -val / jnp.where(slope > 0.0, slope, 1.0)
+            # keep qmax > 0, and steps within twice the iterate's distance from the onset
+            room = jnp.maximum(2.0 * jnp.abs(z), 0.05)
+            return jnp.clip(z + jnp.clip(step, -room, room), -0.999 * qc, None)
 
         safe = jnp.where(xi > 1e-8, xi, 1e-2)
-        qm = jax.lax.fori_loop(0, 10, newton, safe)
-        qm = polish(a1, qm)
-        om = backbone_orbit(law, qm, delta0=di, nodes=nodes, **kw)[0]
-        return jnp.where(xi > 1e-8, om - 1.0, 0.0)
+        xc = ends[0, 1]
+        z0 = jnp.where(safe <= xc, (safe / xc - 1.0) * qc,
+                       jnp.sqrt(jnp.maximum(safe - xc, 0.0)))
+        z = polish(a1_z, jax.lax.fori_loop(0, 16, newton, z0))
+        return jnp.where(xi > 1e-8, state(z)[0] - 1.0, 0.0)
 
     flat = jax.vmap(one)(x.ravel(), d0.ravel())
     return flat.reshape(x.shape)

@@ -139,6 +139,10 @@ class ContactLaw:
     * ``shifts``: rung name -> ``fn(x, **kw)`` with ``delta0`` [m] and ``omega0``
       [rad/s] among the keywords (per sweep);
     * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
+    * ``restoring_force(**kw)`` (with ``delta0``) -> (P', divided, flight acceleration) of
+      the dimensionless oscillator, as :func:`models.generic.restoring_force` computes them
+      from the force: an exact form that is cheaper, for a law whose force is itself a
+      root solve (the generic backbone then evaluates no force);
     * ``contact_edge(**kw)`` -> the overlap [m] below which the surfaces separate
       (default 0: unilateral contact; adhesive laws hold on to negative overlaps);
     * ``domains``: rung name -> ``fn(x, **kw)`` -> bool array, True where that rung's
@@ -171,6 +175,7 @@ class ContactLaw:
     overlap_from_frequency: Callable[..., Any] | None = None
     frequency_from_overlap: Callable[..., Any] | None = None
     linear_q: Callable[..., Any] | None = None
+    restoring_force: Callable[..., Any] | None = None
     contact_edge: Callable[..., Any] | None = None
     domains: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     color: str | None = None

@@ -38,8 +38,10 @@ _KEY = "_p_cells_resampled"   # where the resampled arrays are kept, in the load
 
 
 def both_regions(table: dict[str, np.ndarray]) -> np.ndarray:
-    """The contact cells' coefficients, then the flight cells' (axis -2: cells)."""
-    return np.concatenate([table["coef_contact"], table["coef_flight"]], axis=-2)
+    """The contact cells' coefficients, then the flight cells' (the cells' axis: -2, or -3
+    in a table with a second shape coordinate, whose last axis is its Chebyshev terms)."""
+    axis = -3 if "q_range" in table else -2
+    return np.concatenate([table["coef_contact"], table["coef_flight"]], axis=axis)
 
 
 def contact_knot(s):

@@ -52,20 +52,33 @@ def shape_range(name: str) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
-def backbone_fast(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
+def _log(s):
+    return jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300))
+
+
+def backbone_fast(name: str, x: ArrayLike, s: ArrayLike,
+                  t: ArrayLike | None = None) -> jnp.ndarray:
     """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
-    law's overlap) and shape parameter s; x clipped to [0, X_MAX], ln s to the table's
-    range (values held at the ends: :data:`models.shape_tables.TABLES`). Differentiable,
-    NaN-free."""
+    law's overlap) and shape parameter s (and t, the second one, for a table that has it:
+    Maugis-Dugdale's lam; s and t scalars then); x clipped to [0, X_MAX], ln s and ln t
+    to the table's ranges (values held at the ends: :data:`models.shape_tables.TABLES`).
+    Differentiable, NaN-free."""
     p_lo, p_hi = shape_range(name)
-    p = jnp.clip(jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300)), p_lo, p_hi)
-    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p)
+    p = jnp.clip(_log(s), p_lo, p_hi)
+    q = None if t is None else _log(t)
+    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p, q=q)
 
 
-def in_table(name: str, x: ArrayLike, s: ArrayLike) -> jnp.ndarray:
+def in_table(name: str, x: ArrayLike, s: ArrayLike, t: ArrayLike | None = None) -> jnp.ndarray:
     """True where law ``name``'s table gives its backbone: 0 <= x <= X_MAX and
-    ln s >= p_lo (above p_hi the held value is the Hertz limit, see the module doc)."""
+    ln s >= p_lo (above p_hi the held value is the Hertz limit, see the module doc); for a
+    table with a second coordinate, also ln t inside its range (no limit is held there)."""
     p_lo, _ = shape_range(name)
     x = jnp.asarray(x, float)
-    p = jnp.log(jnp.maximum(jnp.asarray(s, float), 1e-300))
-    return surrogate.within_amplitude(x, X_MAX) & (p >= p_lo - 1e-12)
+    ok = surrogate.within_amplitude(x, X_MAX) & (_log(s) >= p_lo - 1e-12)
+    table = load_table(name)
+    if "q_range" in table:
+        q_lo, q_hi = (float(v) for v in table["q_range"])
+        q = _log(t)
+        ok = ok & (q >= q_lo - 1e-12) & (q <= q_hi + 1e-12)
+    return ok

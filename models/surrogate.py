@@ -18,6 +18,14 @@ nodes of [p_lo, p_hi]; x_c(p) is a Chebyshev interpolant on the same nodes. The 
 spline is not-a-knot; the flight spline is clamped at v = 0 to the contact spline's slope
 there, so the surrogate is C1 across x_c like the exact backbone.
 
+Adhesive laws (``kink_c1=False``). Where the force jumps at the contact edge (JKR, DMT,
+Maugis-Dugdale: the bead leaves with a finite pull), the backbone is continuous at x_c but
+not C1: just past the onset both x and S move like sqrt(q_max - q_c) of the orbit's turning
+point, and S(x) leaves with a slope of its own (JKR at F0/Fc = 0.6: dS/dx -0.09 in contact,
+-2.7 in flight, measured with models.generic.backbone_shift). S(x) is smooth on each side,
+so the flight spline then starts not-a-knot instead of clamped: clamping it to the contact
+slope erred by up to 2.5e-2 in Delta f/f0 within 0.02 of x_c.
+
 Pieces in p. A law whose backbone varies steeply in one stretch of its p range (the
 Greenwood-Williamson sphere where the load passes from the summits' Gaussian tail to the
 Hertz-like bulk, D0 = delta0/sigma ~ -1) sets ``p_breaks``: each piece [p_k, p_k+1] gets
@@ -25,6 +33,13 @@ its own Chebyshev interpolant (``m_pieces`` nodes, zero-padded to the largest), 
 a leading piece axis and the edges as ``p_edges``. The surrogate is then continuous in p
 only to its stated error (a jump of that size at a break; gradients stay finite). Without
 breaks the table is the single interpolant above, unchanged.
+
+A second shape coordinate. A law whose shape depends on two numbers (Maugis-Dugdale: the
+load ratio and Maugis' lambda) sets ``q_range`` and ``m_q``: the table above is built at
+each of ``m_q`` Chebyshev-Gauss nodes of q and every array gains a last axis over them;
+the spline and kink coefficients become Chebyshev interpolants in q on that axis (a tensor
+product in p and q). Such a table is read at one (p, q) for all points, the sampler's case
+(:func:`models.scalar_shape.evaluate_two`).
 
 Cells in p. A table whose p differs from point to point in a fit (one per protocol) can set
 ``p_cells``: it is then evaluated on cubic Hermite cells in p resampled from its
@@ -37,6 +52,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -61,7 +77,10 @@ class BackboneSpec:
     ``exact(x, p, xc)``: exact S at arrays x, p (x_c(p) given for rules that refine next
     to the kink); ``kink(p)``: (x_c, S_c) at the onset of contact loss; ``lindstedt(p)``:
     c(p) in S = c x^2 + O(x^4); ``prefactor(p)``: pre(p) (n - 1 for the power law, whose
-    shift vanishes identically at n = 1; 1 otherwise).
+    shift vanishes identically at n = 1; 1 otherwise). With a second shape coordinate
+    (``q_range``, ``m_q`` nodes; module doc) ``exact``, ``kink`` and ``lindstedt`` take
+    the array q as a last argument. ``kink_c1``: whether S is C1 at x_c (False for a
+    force that jumps at the contact edge; module doc).
     """
 
     p_lo: float
@@ -76,13 +95,19 @@ class BackboneSpec:
     p_breaks: tuple[float, ...] = ()
     m_pieces: tuple[int, ...] = ()
     p_cells: tuple[int, ...] = ()
+    q_range: tuple[float, float] | None = None
+    m_q: int = 0
+    kink_c1: bool = True
 
 
 def chebyshev_nodes(spec: BackboneSpec) -> tuple[np.ndarray, np.ndarray]:
     """Chebyshev-Gauss nodes nu_j in (-1, 1) and p_j (no node at the domain ends)."""
-    m = spec.m_cheb
+    return _gauss_nodes(spec.p_lo, spec.p_hi, spec.m_cheb)
+
+
+def _gauss_nodes(lo: float, hi: float, m: int) -> tuple[np.ndarray, np.ndarray]:
     nu = np.cos(np.pi * (np.arange(m) + 0.5) / m)
-    return nu, 0.5 * (spec.p_lo + spec.p_hi) + nu * (spec.p_hi - spec.p_lo) / 2.0
+    return nu, 0.5 * (lo + hi) + nu * (hi - lo) / 2.0
 
 
 def _knots(k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +139,10 @@ _CHEB_KEYS = ("xc_cheb", "coef_contact", "coef_flight")
 
 def build(spec: BackboneSpec) -> dict[str, np.ndarray]:
     """Evaluate the exact backbone on the grid and fit the splines (deterministic); with
-    ``p_breaks``, one interpolant per piece (module doc)."""
+    ``p_breaks``, one interpolant per piece; with ``q_range``, a tensor product in (p, q)
+    (module doc)."""
+    if spec.q_range is not None:
+        return _build_two(spec)
     if spec.p_breaks:
         out = _build_pieces(spec)
     else:
@@ -155,7 +183,8 @@ def _build_single(spec: BackboneSpec) -> dict[str, np.ndarray]:
         "q_contact": qa, "s_flight": sb, "kink_slope": slope,
         "xc_cheb": to_chebyshev(xc, nu),
         "coef_contact": to_chebyshev(coef_q, nu),
-        "coef_flight": to_chebyshev(spline_coefficients(vk, sb, slope), nu),
+        "coef_flight": to_chebyshev(
+            spline_coefficients(vk, sb, slope if spec.kink_c1 else None), nu),
         "x_max": np.asarray(xm), "p_range": np.asarray([spec.p_lo, spec.p_hi]),
     }
 
@@ -178,6 +207,36 @@ def _build_pieces(spec: BackboneSpec) -> dict[str, np.ndarray]:
     out.update({k: np.stack([pad(d[k]) for d in parts]) for k in _CHEB_KEYS})
     out.update({"u_knots": parts[0]["u_knots"], "v_knots": parts[0]["v_knots"],
                 "x_max": np.asarray(spec.x_max), "p_range": edges[[0, -1]], "p_edges": edges})
+    return out
+
+
+# arrays that do not depend on q: shared by the one-coordinate tables of a q-table
+_Q_SHARED = ("n_nodes", "u_knots", "v_knots", "x_max", "p_range", "p_edges", "p_cells")
+
+
+def _build_two(spec: BackboneSpec) -> dict[str, np.ndarray]:
+    from dataclasses import replace
+
+    if spec.p_cells or spec.m_q < 1:
+        raise ValueError("a table with a second shape coordinate needs m_q >= 1 and no "
+                         "p_cells (it is read at one (p, q) for all points)")
+    nu, qs = _gauss_nodes(*spec.q_range, spec.m_q)
+    parts = []
+    for q in qs:
+        at = lambda a, q=q: np.full(np.shape(a), q)
+        parts.append(build(replace(
+            spec, q_range=None, m_q=0,
+            exact=lambda x, p, xc, at=at, q=q: spec.exact(x, p, xc, at(p)),
+            kink=lambda p, at=at: spec.kink(p, at(p)),
+            lindstedt=lambda p, at=at: spec.lindstedt(p, at(p)))))
+    out = {k: v for k, v in parts[0].items() if k in _Q_SHARED}
+    for k in parts[0]:
+        if k not in _Q_SHARED:
+            out[k] = np.stack([d[k] for d in parts], axis=-1)
+            if k in _CHEB_KEYS:
+                out[k] = to_chebyshev(out[k], nu)
+    out["q_range"] = np.asarray(spec.q_range, float)
+    out["q_nodes"] = qs
     return out
 
 
@@ -222,13 +281,33 @@ def within_amplitude(x: jnp.ndarray, x_max: float = X_MAX) -> jnp.ndarray:
 
 
 def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
-             prefactor: Callable[[jnp.ndarray], jnp.ndarray] | None = None) -> jnp.ndarray:
+             prefactor: Callable[[jnp.ndarray], jnp.ndarray] | None = None,
+             q: jnp.ndarray | None = None) -> jnp.ndarray:
     """S(x, p) from ``table`` for x in [0, x_max], p in its range (callers clamp; both
-    branches are evaluated on clamped coordinates so values and gradients stay finite)."""
+    branches are evaluated on clamped coordinates so values and gradients stay finite).
+    A table with a second shape coordinate takes it as ``q`` (clamped to its range too);
+    p and q are then scalars (under vmap too: one (p, q) per call)."""
     p_lo, p_hi = (float(v) for v in table["p_range"])
     x_max = float(table["x_max"])
     xs = jnp.clip(x, 0.0, x_max)
     ps = jnp.clip(p, p_lo, p_hi)
+    if "q_range" in table:
+        if q is None:
+            raise ValueError("this table has a second shape coordinate: give q")
+        if jnp.ndim(ps) or jnp.ndim(q):
+            # a (p, q) per point: each point read as its own scalar case (correct, but the
+            # q- and p-sums are then taken per point)
+            xs, ps, q = jnp.broadcast_arrays(xs, ps, jnp.asarray(q, float))
+            one = lambda a, b, c: evaluate(table, a[None], b, prefactor=prefactor, q=c)[0]
+            return jax.vmap(one)(xs.ravel(), ps.ravel(), q.ravel()).reshape(xs.shape)
+        q_lo, q_hi = (float(v) for v in table["q_range"])
+        nu_q = (2.0 * jnp.clip(q, q_lo, q_hi) - (q_lo + q_hi)) / (q_hi - q_lo)
+        piece, nu, xc_cheb = _piece(table, ps)
+        rows = jnp.asarray(np.swapaxes(p_cells.both_regions(table), -4, -3))
+        if piece is not None:
+            rows = rows[materialize(piece)]
+        pre = 1.0 if prefactor is None else prefactor(ps)
+        return scalar_shape.evaluate_two(table, rows, jnp.asarray(xc_cheb), xs, nu, nu_q, pre)
     if "p_cells" in table:
         # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)

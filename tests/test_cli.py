@@ -245,3 +245,19 @@ def test_rungs_default_laws_name_those_left_out():
                 law.shifts if law.source == "built-in" else law.rungs)]
             assert missing and all(r in why for r in missing), (n, why)
     assert rung_laws(["first_order", "backbone"], ["hertz"]) == (["hertz"], {})
+
+
+def test_default_comparison_refuses_a_rung_its_laws_have_no_fast_path_at():
+    # the rough sphere's first order is the generic quadrature (hours inside NUTS): the
+    # default comparison at that rung is refused, naming the law, not run for hours
+    from models.registry import get_law
+    from workflows.pipeline import comparison_specs, default_model_names
+
+    slow = [n for n in default_model_names() if n != "baseline"
+            and "first_order" not in get_law(n).shifts]
+    assert slow, "every default law has a fast first order: pick another rung to test"
+    with pytest.raises(ValueError, match="no fast path at rung 'first_order'") as err:
+        comparison_specs(None, "first_order", "normal")
+    assert all(n in str(err.value) for n in slow)
+    named = [n for n in default_model_names() if n not in slow]
+    assert set(comparison_specs(named, "first_order", "normal")) == set(named)

@@ -8,6 +8,12 @@ import pytest
 from models import registry, shape_backbone, shape_tables
 
 X = np.array([0.05, 0.4, 0.85, 1.1, 1.6, 2.0])
+# the second shape coordinate, where a table has one (Maugis-Dugdale's lam, inside its range)
+T = {name: 1.0 for name, tab in shape_tables.TABLES.items() if tab.q_range is not None}
+
+
+def _fast(name, x, s):
+    return np.asarray(shape_backbone.backbone_fast(name, x, s, T.get(name)))
 
 
 @pytest.mark.parametrize("name", sorted(shape_tables.TABLES))
@@ -21,15 +27,26 @@ def test_stored_ranges_are_the_builders(name):
 def test_values_are_held_beyond_the_ranges(name):
     p_lo, p_hi = shape_backbone.shape_range(name)
     for p_end, p_out in ((p_lo, p_lo - 2.0), (p_hi, p_hi + 3.0)):
-        end = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(p_end)))
-        out = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(p_out)))
-        np.testing.assert_array_equal(out, end)
-    at_max = np.asarray(shape_backbone.backbone_fast(name, 2.0, np.exp(p_hi)))
-    beyond = np.asarray(shape_backbone.backbone_fast(name, 3.5, np.exp(p_hi)))
-    assert beyond == at_max
+        end = _fast(name, X, np.exp(p_end))
+        np.testing.assert_array_equal(_fast(name, X, np.exp(p_out)), end)
+    assert _fast(name, 3.5, np.exp(p_hi)) == _fast(name, 2.0, np.exp(p_hi))
     # inside the range the shape parameter matters (the table is not flat)
-    mid = np.asarray(shape_backbone.backbone_fast(name, X, np.exp(0.5 * (p_lo + p_hi))))
+    mid = _fast(name, X, np.exp(0.5 * (p_lo + p_hi)))
     assert np.max(np.abs(mid - end)) > 1e-4
+
+
+def test_a_second_shape_coordinate_is_refused_outside_its_range_not_held():
+    """Maugis-Dugdale's lam: the table has no limit to hold beyond [0.1, 100], so its
+    domain (in_table) excludes those points; inside, lam changes the shape."""
+    for name in T:
+        q_lo, q_hi = shape_tables.TABLES[name].q_range
+        s = 3.0
+        ok = [bool(shape_backbone.in_table(name, 0.5, s, np.exp(q)))
+              for q in (q_lo - 0.1, q_lo + 1e-9, q_hi - 1e-9, q_hi + 0.1)]
+        assert ok == [False, True, True, False], (name, ok)
+        lo, hi = (np.asarray(shape_backbone.backbone_fast(name, X, s, np.exp(q)))
+                  for q in (q_lo, q_hi))
+        assert np.max(np.abs(hi - lo)) > 1e-3
 
 
 def test_laws_backbone_rungs_read_these_tables():

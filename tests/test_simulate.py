@@ -114,7 +114,10 @@ def test_peak_past_contact_loss_is_the_least_drive_peak():
         shifts.append(p["shift"])
         om, e = p["frequency_Hz"] / sim.f0, p["base_displacement_m"] / sim.delta0
         v, r = drive_for(x, om, jnp.zeros(2 * h + 2).at[1].set(x).at[-1].set(e))
-        assert float(r) < 1e-12 and float(v[-1]) == pytest.approx(e, rel=1e-9)
+        # at the peak itself Newton may stall a little above round-off: past contact loss
+        # the sampled force has an unbounded slope at y = 0 (measured: 2.3e-10 at x = 1.02
+        # on an AMD EPYC, below 1e-12 on the CPUs of earlier runs); its drive still matches the peak's to 1e-9
+        assert float(r) < 1e-9 and float(v[-1]) == pytest.approx(e, rel=1e-9)
         # the peak: any other frequency needs more drive for this amplitude (steps past the
         # ~1e-4 wide ripple that n = 64 samples leave on E(Omega))
         for d in (-3e-3, -1e-3, 1e-3, 3e-3):

@@ -102,7 +102,20 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
 
     check_rung(rung, fit=True)
     known = model_names()
-    names = default_model_names() if names is None else list(names)
+    if names is None:
+        names = default_model_names()
+        # a built-in law without a fast path at the rung would run the generic quadrature
+        # at every likelihood call (the rough sphere's first order: over 19 minutes of NUTS
+        # without finishing): refused by default, fitted when named
+        slow = [n for n in names if n != BASELINE and rung in get_law(n).rungs
+                and rung not in get_law(n).shifts and get_law(n).source == "built-in"]
+        if slow:
+            fast = [n for n in names if n not in slow]
+            raise ValueError(
+                f"law(s) {slow} have no fast path at rung '{rung}' (their generic quadrature "
+                f"would run at every NUTS step: hours); fit the others with --laws "
+                f"{','.join(fast)}, or name these too to wait for them")
+    names = list(names)
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ValueError(f"unknown law(s) {unknown}; choose from {known}")
