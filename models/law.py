@@ -195,6 +195,12 @@ class ContactLaw:
     def predicts_q(self) -> bool:
         return self.linear_q is not None
 
+    def too_slow_for_nuts(self, rung: str) -> bool:
+        """True where a built-in law has ``rung`` only as the generic quadrature (no closed
+        form or table): that quadrature at every likelihood call costs hours in NUTS. A law
+        file's law is never so marked: its file asked for the rung."""
+        return rung in self.rungs and rung not in self.shifts and self.source == "built-in"
+
     def param(self, name: str) -> Param:
         for p in self.params:
             if p.name == name:

@@ -107,8 +107,7 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
         # a built-in law without a fast path at the rung would run the generic quadrature
         # at every likelihood call (the rough sphere's first order: over 19 minutes of NUTS
         # without finishing): refused by default, fitted when named
-        slow = [n for n in names if n != BASELINE and rung in get_law(n).rungs
-                and rung not in get_law(n).shifts and get_law(n).source == "built-in"]
+        slow = [n for n in names if n != BASELINE and get_law(n).too_slow_for_nuts(rung)]
         if slow:
             fast = [n for n in names if n not in slow]
             raise ValueError(

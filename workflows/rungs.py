@@ -55,8 +55,7 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
         law = get_law(n)
         lacks = [r for r in rungs if r not in law.rungs]
         # a law from --law-file is fitted at every rung it has: its file asked for it
-        slow = [r for r in rungs if r in law.rungs and r not in law.shifts
-                and law.source == "built-in"]
+        slow = [r for r in rungs if law.too_slow_for_nuts(r)]
         why = ([f"no rung {', '.join(lacks)}"] if lacks else []) + (
             [f"no fast path at {', '.join(slow)} (generic quadrature, too slow for NUTS; "
              "name it with --laws to fit it anyway)"] if slow else [])
