@@ -81,7 +81,8 @@ def _law():
                      "backbone is a table in (F0/Fc, lambda), its first order the generic "
                      "quadrature (exact, slow in a sampler); contact is taken to part at "
                      "delta = 0, as for JKR and DMT; not in the default comparison (a NUTS "
-                     "step costs 13x Hertz's: fit it by name)"),
+                     "step costs 5.7x Hertz's and its programs compile for minutes: fit it "
+                     "by name)"),
         params=(YOUNG, GAMMA, lam),
         force=lambda delta, *, e_star, radius, gamma, lam, **_: force(
             delta, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
@@ -105,10 +106,11 @@ def _law():
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                       kw["lam"])},
         cost=5.0,
-        # measured on the embedded data, one core: 180 us per NUTS step against Hertz's 14
-        # (the two-coordinate table's contraction and its gradient, ~100 us: the whole
-        # table is read every step), so ESS/s ~0.07 of Hertz's, below the 1/3 a law of the
-        # default comparison must reach; a fit by name takes ~3 min
+        # measured on the embedded data, one core: 76 us per NUTS step against Hertz's 13
+        # (the backbone on (p, q) patches, models.pq_patches: 180 us before), ESS/s 0.14 of
+        # Hertz's, below the 1/3 a law of the default comparison must reach; and a cold fit
+        # by name takes ~3.5 min, mostly compiling the static map's exact fallback (the
+        # root solves outside its tables): it would put the default comparison past 5 min
         in_default_comparison=False,
     )
 

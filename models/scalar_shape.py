@@ -28,7 +28,7 @@ from . import chebyshev
 from ._math import materialize
 from .p_cells import amplitude_cell, cubic, value_and_tangent
 
-__all__ = ["evaluate", "evaluate_two"]
+__all__ = ["evaluate"]
 
 
 def evaluate(table: dict[str, np.ndarray], rows: jnp.ndarray, xc_cheb: jnp.ndarray,
@@ -69,43 +69,3 @@ def evaluate(table: dict[str, np.ndarray], rows: jnp.ndarray, xc_cheb: jnp.ndarr
     return f(jnp.asarray(xs, float), jnp.asarray(nu, float), jnp.asarray(pre, float),
              jnp.asarray(rows, float), jnp.asarray(xc_cheb, float))
 
-
-def evaluate_two(table: dict[str, np.ndarray], rows: jnp.ndarray, xc_cheb: jnp.ndarray,
-                 xs: jnp.ndarray, nu: jnp.ndarray, nu_q: jnp.ndarray,
-                 pre: jnp.ndarray | float = 1.0) -> jnp.ndarray:
-    """:func:`evaluate` for a table with a second shape coordinate: one scalar nu (p) and
-    one scalar nu_q (q) for every point; ``rows`` (cells, 4, m, m_q), ``xc_cheb`` (m, m_q).
-
-    The q-sums are taken first, with their q-slopes (one contraction of the table), then
-    the p-sums as in :func:`evaluate`; the tangent is that of :func:`evaluate` with the
-    coefficients' and x_c's derivatives along the direction (dnu, dnu_q)."""
-    m, m_q = (int(v) for v in np.shape(xc_cheb)[-2:])
-    x_max = float(table["x_max"])
-
-    @jax.custom_jvp
-    def f(xs, nu, nu_q, pre, rows, xc_cheb):
-        t, u = chebyshev.basis(nu, m), chebyshev.basis(nu_q, m_q)
-        inside, i, d = amplitude_cell(table, xs, t @ (xc_cheb @ u))
-        y = cubic(((rows @ u) @ t)[materialize(i)], d)
-        return jnp.where(inside, pre * xs * xs * y, y)
-
-    @f.defjvp
-    def f_jvp(primals, tangents):
-        xs, nu, nu_q, pre, rows, xc_cheb = primals
-        txs, tnu, tnu_q, tpre = tangents[:4]     # the table's constants have none
-        t, dt = chebyshev.basis_and_slope(nu, m)
-        u, du = chebyshev.basis_and_slope(nu_q, m_q)
-        uu = jnp.stack([u, du], axis=-1)
-        xq = xc_cheb @ uu                                   # (m, 2)
-        xc = t @ xq[:, 0]
-        dxc = (dt @ xq[:, 0]) * tnu + (t @ xq[:, 1]) * tnu_q
-        inside, i, d = amplitude_cell(table, xs, xc)
-        rq = rows @ uu                                      # (cells, 4, m, 2)
-        both = jnp.stack([rq[..., 0] @ t, rq[..., 0] @ dt, rq[..., 1] @ t], axis=-1)
-        g = both[materialize(i)]                            # (..., 4, 3)
-        return value_and_tangent(inside, xs, d, xc, dxc, g[..., 0],
-                                 g[..., 1] * tnu + g[..., 2] * tnu_q, pre, x_max, txs,
-                                 1.0, tpre)
-
-    return f(jnp.asarray(xs, float), jnp.asarray(nu, float), jnp.asarray(nu_q, float),
-             jnp.asarray(pre, float), jnp.asarray(rows, float), jnp.asarray(xc_cheb, float))

@@ -39,7 +39,7 @@ load ratio and Maugis' lambda) sets ``q_range`` and ``m_q``: the table above is 
 each of ``m_q`` Chebyshev-Gauss nodes of q and every array gains a last axis over them;
 the spline and kink coefficients become Chebyshev interpolants in q on that axis (a tensor
 product in p and q). Such a table is read at one (p, q) for all points, the sampler's case
-(:func:`models.scalar_shape.evaluate_two`).
+(:mod:`models.pq_patches`: local patches in (p, q) resampled from that interpolant).
 
 Cells in p. A table whose p differs from point to point in a fit (one per protocol) can set
 ``p_cells``: it is then evaluated on cubic Hermite cells in p resampled from its
@@ -56,7 +56,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import chebyshev, p_cells, scalar_shape
+from . import chebyshev, p_cells, pq_patches, scalar_shape
 from ._math import materialize
 
 __all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "chebyshev_nodes",
@@ -302,12 +302,10 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
             return jax.vmap(one)(xs.ravel(), ps.ravel(), q.ravel()).reshape(xs.shape)
         q_lo, q_hi = (float(v) for v in table["q_range"])
         nu_q = (2.0 * jnp.clip(q, q_lo, q_hi) - (q_lo + q_hi)) / (q_hi - q_lo)
-        piece, nu, xc_cheb = _piece(table, ps)
-        rows = jnp.asarray(np.swapaxes(p_cells.both_regions(table), -4, -3))
-        if piece is not None:
-            rows = rows[materialize(piece)]
+        piece, nu, _ = _piece(table, ps)
         pre = 1.0 if prefactor is None else prefactor(ps)
-        return scalar_shape.evaluate_two(table, rows, jnp.asarray(xc_cheb), xs, nu, nu_q, pre)
+        # on local patches in (p, q): a step reads one (models.pq_patches)
+        return pq_patches.evaluate(table, xs, nu, nu_q, piece, pre)
     if "p_cells" in table:
         # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)

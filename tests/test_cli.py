@@ -261,3 +261,17 @@ def test_default_comparison_refuses_a_rung_its_laws_have_no_fast_path_at():
     assert all(n in str(err.value) for n in slow)
     named = [n for n in default_model_names() if n not in slow]
     assert set(comparison_specs(named, "first_order", "normal")) == set(named)
+
+
+def test_inference_benchmark_covers_every_law_with_a_fast_backbone():
+    """`bench inference` measures the default comparison's laws and the built-in laws left
+    out of it that have a fast backbone (their speed is why they are out), baseline last."""
+    from models.registry import laws
+    from workflows.bench_inference import _bench_names
+    from workflows.pipeline import default_model_names
+
+    names = _bench_names(default_model_names())
+    fast = {law.name for law in laws() if law.source == "built-in"
+            and "backbone" in law.rungs and not law.too_slow_for_nuts("backbone")}
+    assert fast <= set(names) and names[-1] == "baseline"
+    assert set(default_model_names()) <= set(names)

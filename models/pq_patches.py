@@ -1,0 +1,141 @@
+"""A backbone surrogate with two shape coordinates, read at one (p, q) for every point, on
+local Chebyshev patches resampled from its global interpolant.
+
+Why. A table with a second shape coordinate (:mod:`models.surrogate`; Maugis-Dugdale's, in
+the load ratio p = ln F0/Fc and q = ln lambda) is a tensor product of m Chebyshev terms in p
+and m_q in q for every spline cell's 4 coefficients and for x_c: 16 x 20 x 377 numbers,
+0.96 MB. Read at the sampler's one (p, q), every step contracted all of them, value and
+both slopes (one core: 108 us a step with its gradient, the value alone 24; XLA's CPU dot
+with two right-hand columns ran 5x slower than two matrix-vector products). On patches, a
+step reads one: ``DEGREE + 1`` terms in each coordinate, 25 x 377 numbers.
+
+Construction (deterministic, from the stored table, on first use, kept in the loaded
+table): each piece of the table in p (one, unless it has ``p_edges``) is cut into
+``P_PATCHES`` equal intervals of its Chebyshev coordinate nu, the q range into
+``Q_PATCHES``; on each patch the global interpolant is evaluated at the
+(DEGREE + 1)^2 Chebyshev-Gauss nodes and re-expanded there (interpolation at those nodes:
+within a small factor of the best approximation of that degree). The surrogate is then
+continuous across a patch edge to the resampling error only (a jump of that size;
+gradients stay finite).
+
+Error against the global interpolant, bounded per coordinate from the stored
+Maugis-Dugdale table (each spline coefficient's error times the cell's width to its power,
+x^2 <= 4 in contact): 1.3e-6 along p, 4.6e-7 along q at these settings (8 x 4 patches of
+degree 6: 6.7e-7 and 4.6e-7 but 49 terms a step). The tests measure it on the surrogate's
+values: below :data:`ERROR`, against the table's own stated 1e-5.
+
+Derivatives by hand (``custom_jvp``), as :mod:`models.scalar_shape`: the patch's three
+contractions (value, d/dnu, d/dnu_q) are matrix-vector products with the patch's
+coefficients, and the per-point tangent is :func:`models.p_cells.value_and_tangent`'s.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from numpy.polynomial import chebyshev as cheb
+
+from . import chebyshev
+from ._math import materialize
+from .p_cells import amplitude_cell, both_regions, cubic, value_and_tangent
+
+__all__ = ["P_PATCHES", "Q_PATCHES", "DEGREE", "ERROR", "resample", "evaluate"]
+
+P_PATCHES = 16
+"""Patches along each piece's p coordinate (equal in nu)."""
+Q_PATCHES = 8
+"""Patches along q (equal in nu_q)."""
+DEGREE = 4
+"""Chebyshev degree of a patch in p and in q."""
+ERROR = 2e-6
+"""Largest difference [-] in Delta f/f0 between the patches and the global interpolant
+they are resampled from (measured by the tests, module doc)."""
+
+_KEY = "_pq_patches"
+
+
+def resample(table: dict[str, np.ndarray]) -> np.ndarray:
+    """The patches of ``table``: (pieces x P_PATCHES x Q_PATCHES, K + 1, (DEGREE + 1)^2),
+    K = 4 x cells spline coefficients then x_c, the patch's tensor Chebyshev coefficients
+    (p index major) last; computed once and kept in the table dict."""
+    if _KEY in table:
+        return table[_KEY]
+    coef = np.swapaxes(both_regions(table), -4, -3)        # (..., cells, 4, m, m_q)
+    xcc = np.asarray(table["xc_cheb"])                       # (..., m, m_q)
+    if "p_edges" not in table:
+        coef, xcc = coef[None], xcc[None]
+    m, m_q = xcc.shape[-2:]
+    n = DEGREE + 1
+    g = np.cos(np.pi * (np.arange(n) + 0.5) / n)             # local Chebyshev-Gauss nodes
+    to_coef = np.linalg.inv(cheb.chebvander(g, n - 1))       # values at g -> coefficients
+    out = []
+    for k in range(xcc.shape[0]):
+        glob = np.concatenate([coef[k].reshape(-1, m, m_q), xcc[k][None]])   # (K+1, m, m_q)
+        for i in range(P_PATCHES):
+            vp = cheb.chebvander(-1.0 + (2 * i + 1 + g) / P_PATCHES, m - 1)      # (n, m)
+            for j in range(Q_PATCHES):
+                vq = cheb.chebvander(-1.0 + (2 * j + 1 + g) / Q_PATCHES, m_q - 1)
+                vals = np.einsum("kab,ia,jb->kij", glob, vp, vq)
+                out.append(np.einsum("kij,ai,bj->kab", vals, to_coef, to_coef)
+                           .reshape(glob.shape[0], n * n))
+    table[_KEY] = np.ascontiguousarray(np.stack(out))
+    return table[_KEY]
+
+
+def _locate(nu, patches: int):
+    # (patch index, local coordinate in [-1, 1]); nu is clamped to [-1, 1] by the caller
+    s = (nu + 1.0) * (0.5 * patches)
+    i = jnp.clip(jnp.floor(s).astype(jnp.int32), 0, patches - 1)
+    return i, 2.0 * (s - i) - 1.0
+
+
+def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, nu: jnp.ndarray,
+             nu_q: jnp.ndarray, piece: jnp.ndarray | None = None,
+             pre: jnp.ndarray | float = 1.0) -> jnp.ndarray:
+    """F(x, nu, nu_q) [-]: pre x^2 y in contact, y in flight (:mod:`models.surrogate`), at
+    amplitudes xs in [0, x_max] and one scalar (nu, nu_q) in [-1, 1]^2, the table's
+    Chebyshev coordinates (in its p piece ``piece``, when it has pieces)."""
+    patches = resample(table)
+    n = DEGREE + 1
+    x_max = float(table["x_max"])
+    first = 0 if piece is None else piece * (P_PATCHES * Q_PATCHES)
+
+    def coefficients(nu, nu_q, coef, slopes: bool):
+        ip, a = _locate(nu, P_PATCHES)
+        iq, b = _locate(nu_q, Q_PATCHES)
+        k = materialize(first + ip * Q_PATCHES + iq)
+        c = jax.lax.dynamic_index_in_dim(coef, k, 0, keepdims=False)        # (K+1, n*n)
+        if not slopes:
+            return c @ jnp.outer(chebyshev.basis(a, n), chebyshev.basis(b, n)).ravel()
+        ta, da = chebyshev.basis_and_slope(a, n)
+        tb, db = chebyshev.basis_and_slope(b, n)
+        # d a/d nu = P_PATCHES, d b/d nu_q = Q_PATCHES; three matrix-vector products (one
+        # dot with three columns is slower on the CPU, module doc)
+        return (c @ jnp.outer(ta, tb).ravel(), c @ (P_PATCHES * jnp.outer(da, tb).ravel()),
+                c @ (Q_PATCHES * jnp.outer(ta, db).ravel()))
+
+    # the patches are an argument, not closed over (see models.scalar_shape.evaluate)
+    @jax.custom_jvp
+    def f(xs, nu, nu_q, pre, coef):
+        c = coefficients(nu, nu_q, coef, slopes=False)
+        inside, i, d = amplitude_cell(table, xs, c[-1])
+        y = cubic(c[:-1].reshape(-1, 4)[materialize(i)], d)
+        return jnp.where(inside, pre * xs * xs * y, y)
+
+    @f.defjvp
+    def f_jvp(primals, tangents):
+        xs, nu, nu_q, pre, coef = primals
+        txs, tnu, tnu_q, tpre = tangents[:4]     # the table's constants have none
+        c, c_p, c_q = coefficients(nu, nu_q, coef, slopes=True)
+        xc = c[-1]
+        inside, i, d = amplitude_cell(table, xs, xc)
+        # one gather of the three (primal) coefficient sets; the tangents enter after it,
+        # so that the values stay computable without them (linearization)
+        g = jnp.stack([c[:-1], c_p[:-1], c_q[:-1]], -1).reshape(-1, 4, 3)[materialize(i)]
+        return value_and_tangent(inside, xs, d, xc, c_p[-1] * tnu + c_q[-1] * tnu_q,
+                                 g[..., 0], g[..., 1] * tnu + g[..., 2] * tnu_q, pre, x_max,
+                                 txs, 1.0, tpre)
+
+    return f(jnp.asarray(xs, float), jnp.asarray(nu, float), jnp.asarray(nu_q, float),
+             jnp.asarray(pre, float), jnp.asarray(patches))
