@@ -10,9 +10,10 @@ with two right-hand columns ran 5x slower than two matrix-vector products). On p
 step reads one: ``DEGREE + 1`` terms in each coordinate, 25 x 377 numbers.
 
 Construction (deterministic, from the stored table, on first use, kept in the loaded
-table): each piece of the table in p (one, unless it has ``p_edges``) is cut into
-``P_PATCHES`` equal intervals of its Chebyshev coordinate nu, the q range into
-``Q_PATCHES``; on each patch the global interpolant is evaluated at the
+table): the table's p range is cut into ``P_PATCHES`` equal intervals of its Chebyshev
+coordinate nu, its q range into ``Q_PATCHES`` (a two-coordinate table with pieces in p,
+``p_edges``, is refused: none is built, and the piece index would be a traced value
+inside the derivative rule); on each patch the global interpolant is evaluated at the
 (DEGREE + 1)^2 Chebyshev-Gauss nodes and re-expanded there (interpolation at those nodes:
 within a small factor of the best approximation of that degree). The surrogate is then
 continuous across a patch edge to the resampling error only (a jump of that size;
@@ -43,7 +44,7 @@ from .p_cells import amplitude_cell, both_regions, cubic, value_and_tangent
 __all__ = ["P_PATCHES", "Q_PATCHES", "DEGREE", "ERROR", "resample", "evaluate"]
 
 P_PATCHES = 16
-"""Patches along each piece's p coordinate (equal in nu)."""
+"""Patches along p (equal in its Chebyshev coordinate nu)."""
 Q_PATCHES = 8
 """Patches along q (equal in nu_q)."""
 DEGREE = 4
@@ -56,29 +57,29 @@ _KEY = "_pq_patches"
 
 
 def resample(table: dict[str, np.ndarray]) -> np.ndarray:
-    """The patches of ``table``: (pieces x P_PATCHES x Q_PATCHES, K + 1, (DEGREE + 1)^2),
-    K = 4 x cells spline coefficients then x_c, the patch's tensor Chebyshev coefficients
-    (p index major) last; computed once and kept in the table dict."""
+    """The patches of ``table``: (P_PATCHES x Q_PATCHES, K + 1, (DEGREE + 1)^2), K = 4 x
+    cells spline coefficients then x_c, the patch's tensor Chebyshev coefficients (p index
+    major) last; computed once and kept in the table dict."""
     if _KEY in table:
         return table[_KEY]
-    coef = np.swapaxes(both_regions(table), -4, -3)        # (..., cells, 4, m, m_q)
-    xcc = np.asarray(table["xc_cheb"])                       # (..., m, m_q)
-    if "p_edges" not in table:
-        coef, xcc = coef[None], xcc[None]
-    m, m_q = xcc.shape[-2:]
+    if "p_edges" in table:
+        raise ValueError("a table with a second shape coordinate and pieces in p "
+                         "(p_edges) has no patches: build it without p_breaks")
+    coef = np.swapaxes(both_regions(table), -4, -3)        # (cells, 4, m, m_q)
+    xcc = np.asarray(table["xc_cheb"])                       # (m, m_q)
+    m, m_q = xcc.shape
+    glob = np.concatenate([coef.reshape(-1, m, m_q), xcc[None]])          # (K+1, m, m_q)
     n = DEGREE + 1
     g = np.cos(np.pi * (np.arange(n) + 0.5) / n)             # local Chebyshev-Gauss nodes
     to_coef = np.linalg.inv(cheb.chebvander(g, n - 1))       # values at g -> coefficients
     out = []
-    for k in range(xcc.shape[0]):
-        glob = np.concatenate([coef[k].reshape(-1, m, m_q), xcc[k][None]])   # (K+1, m, m_q)
-        for i in range(P_PATCHES):
-            vp = cheb.chebvander(-1.0 + (2 * i + 1 + g) / P_PATCHES, m - 1)      # (n, m)
-            for j in range(Q_PATCHES):
-                vq = cheb.chebvander(-1.0 + (2 * j + 1 + g) / Q_PATCHES, m_q - 1)
-                vals = np.einsum("kab,ia,jb->kij", glob, vp, vq)
-                out.append(np.einsum("kij,ai,bj->kab", vals, to_coef, to_coef)
-                           .reshape(glob.shape[0], n * n))
+    for i in range(P_PATCHES):
+        vp = cheb.chebvander(-1.0 + (2 * i + 1 + g) / P_PATCHES, m - 1)          # (n, m)
+        for j in range(Q_PATCHES):
+            vq = cheb.chebvander(-1.0 + (2 * j + 1 + g) / Q_PATCHES, m_q - 1)
+            vals = np.einsum("kab,ia,jb->kij", glob, vp, vq)
+            out.append(np.einsum("kij,ai,bj->kab", vals, to_coef, to_coef)
+                       .reshape(glob.shape[0], n * n))
     table[_KEY] = np.ascontiguousarray(np.stack(out))
     return table[_KEY]
 
@@ -91,20 +92,18 @@ def _locate(nu, patches: int):
 
 
 def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, nu: jnp.ndarray,
-             nu_q: jnp.ndarray, piece: jnp.ndarray | None = None,
-             pre: jnp.ndarray | float = 1.0) -> jnp.ndarray:
+             nu_q: jnp.ndarray, pre: jnp.ndarray | float = 1.0) -> jnp.ndarray:
     """F(x, nu, nu_q) [-]: pre x^2 y in contact, y in flight (:mod:`models.surrogate`), at
     amplitudes xs in [0, x_max] and one scalar (nu, nu_q) in [-1, 1]^2, the table's
-    Chebyshev coordinates (in its p piece ``piece``, when it has pieces)."""
+    Chebyshev coordinates."""
     patches = resample(table)
     n = DEGREE + 1
     x_max = float(table["x_max"])
-    first = 0 if piece is None else piece * (P_PATCHES * Q_PATCHES)
 
     def coefficients(nu, nu_q, coef, slopes: bool):
         ip, a = _locate(nu, P_PATCHES)
         iq, b = _locate(nu_q, Q_PATCHES)
-        k = materialize(first + ip * Q_PATCHES + iq)
+        k = materialize(ip * Q_PATCHES + iq)
         c = jax.lax.dynamic_index_in_dim(coef, k, 0, keepdims=False)        # (K+1, n*n)
         if not slopes:
             return c @ jnp.outer(chebyshev.basis(a, n), chebyshev.basis(b, n)).ravel()

@@ -302,10 +302,11 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
             return jax.vmap(one)(xs.ravel(), ps.ravel(), q.ravel()).reshape(xs.shape)
         q_lo, q_hi = (float(v) for v in table["q_range"])
         nu_q = (2.0 * jnp.clip(q, q_lo, q_hi) - (q_lo + q_hi)) / (q_hi - q_lo)
-        piece, nu, _ = _piece(table, ps)
+        _, nu, _ = _piece(table, ps)
         pre = 1.0 if prefactor is None else prefactor(ps)
-        # on local patches in (p, q): a step reads one (models.pq_patches)
-        return pq_patches.evaluate(table, xs, nu, nu_q, piece, pre)
+        # on local patches in (p, q): a step reads one (models.pq_patches; a table with
+        # pieces in p is refused there)
+        return pq_patches.evaluate(table, xs, nu, nu_q, pre)
     if "p_cells" in table:
         # p's own shape: a (P, 1) column of per-protocol shapes is located once per row
         return p_cells.evaluate(table, xs, ps, prefactor)

@@ -158,3 +158,10 @@ def test_patch_derivatives_against_finite_differences():
             val, grads = jax.value_and_grad(lambda a, b, c: jnp.sum(f(a, b, c)), (0, 1, 2))(
                 xe, jnp.asarray(p), jnp.asarray(q))
             assert np.isfinite(val) and all(np.all(np.isfinite(v)) for v in grads)
+
+
+def test_patches_refuse_a_table_with_pieces_in_p():
+    table = {k: v for k, v in load_table("maugis_dugdale").items() if not k.startswith("_")}
+    table["p_edges"] = np.asarray([*table["p_range"][:1], 0.0, *table["p_range"][1:]])
+    with pytest.raises(ValueError, match="pieces in p"):
+        pq_patches.resample(table)
