@@ -25,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 
-__all__ = ["MAX_TERMS", "basis", "basis_and_slope"]
+__all__ = ["MAX_TERMS", "basis", "basis_and_slope", "gauss_nodes", "to_chebyshev"]
 
 MAX_TERMS = 24
 """The most terms evaluated from powers (2e-8 absolute rounding in T_23); above, the
@@ -75,3 +75,23 @@ def basis_and_slope(nu: jnp.ndarray, m: int) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(T_k(nu), dT_k/dnu) [-], each nu.shape + (m,)."""
     nu = jnp.asarray(nu, float)
     return jax.jvp(lambda v: basis(v, m), (nu,), (jnp.ones_like(nu),))
+
+
+def gauss_nodes(lo: float, hi: float, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The m Chebyshev-Gauss nodes nu_j = cos(pi (j + 1/2)/m) in (-1, 1) and their images
+    in [lo, hi] (no node at the ends): where every table of the project is sampled."""
+    nu = np.cos(np.pi * (np.arange(m) + 0.5) / m)
+    return nu, 0.5 * (lo + hi) + nu * (hi - lo) / 2.0
+
+
+def to_chebyshev(values: np.ndarray, nu: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Values on the Chebyshev-Gauss nodes nu (along ``axis``) -> the coefficients of
+    their interpolant, c_k = (2/m) sum_j f(nu_j) T_k(nu_j), c_0 halved (discrete
+    orthogonality of T_k on those nodes)."""
+    values = np.moveaxis(np.asarray(values, float), axis, -1)
+    m = values.shape[-1]
+    t = np.cos(np.outer(np.arange(m), np.arccos(nu)))  # T_k(nu_j)
+    coef = values @ t.T * (2.0 / m)
+    coef[..., 0] /= 2.0
+    return np.moveaxis(coef, -1, axis)
+

@@ -69,34 +69,27 @@ def exact_state(r: ArrayLike, lam: ArrayLike) -> tuple[jnp.ndarray, ...]:
             jnp.log(d0) - (2.0 / 3.0) * jnp.log(pbar), pc)
 
 
-def _nodes(lo, hi):
-    nu = np.cos(np.pi * (np.arange(_M) + 0.5) / _M)
-    return nu, 0.5 * (lo + hi) + 0.5 * (hi - lo) * nu
-
-
-def _coefficients(values: np.ndarray, nu: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
-    t = np.cos(np.outer(np.arange(_M), np.arccos(nu))) * (2.0 / _M)
-    t[0] /= 2.0
-    for ax in axes:
-        values = np.moveaxis(np.tensordot(t, values, axes=([1], [ax])), 0, ax)
-    return values
+def _coefficients(values: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    # the tensor-product interpolant: along ln r, then along ln lam
+    return chebyshev.to_chebyshev(chebyshev.to_chebyshev(values, nu, axis=0), nu, axis=1)
 
 
 def build() -> dict[str, np.ndarray]:
     """The Chebyshev coefficients on every piece (deterministic)."""
     fn = jax.jit(jax.vmap(lambda p, q: exact_state(jnp.exp(p), jnp.exp(q))))
-    nu = _nodes(-1.0, 1.0)[0]
+    nu = chebyshev.gauss_nodes(-1.0, 1.0, _M)[0]
     ln_n = np.empty((len(_P_EDGES) - 1, len(_Q_EDGES) - 1, _M, _M))
     ln_d = np.empty_like(ln_n)
     pc = np.empty((len(_Q_EDGES) - 1, _M))
     for i, (a, b) in enumerate(zip(_P_EDGES[:-1], _P_EDGES[1:])):
         for j, (c, d) in enumerate(zip(_Q_EDGES[:-1], _Q_EDGES[1:])):
-            pp, qq = np.meshgrid(_nodes(a, b)[1], _nodes(c, d)[1], indexing="ij")
+            pp, qq = np.meshgrid(chebyshev.gauss_nodes(a, b, _M)[1],
+                                 chebyshev.gauss_nodes(c, d, _M)[1], indexing="ij")
             vals = [np.asarray(v).reshape(pp.shape)
                     for v in fn(jnp.asarray(pp.ravel()), jnp.asarray(qq.ravel()))]
-            ln_n[i, j] = _coefficients(vals[0], nu, (0, 1))
-            ln_d[i, j] = _coefficients(vals[1], nu, (0, 1))
-            pc[j] = _coefficients(vals[2][0], nu, (0,))
+            ln_n[i, j] = _coefficients(vals[0], nu)
+            ln_d[i, j] = _coefficients(vals[1], nu)
+            pc[j] = chebyshev.to_chebyshev(vals[2][0], nu)
     return {"p_edges": np.asarray(_P_EDGES), "q_edges": np.asarray(_Q_EDGES),
             "ln_n": ln_n, "ln_d": ln_d, "pull_off": pc}
 

@@ -70,16 +70,15 @@ def resample(table: dict[str, np.ndarray]) -> np.ndarray:
     m, m_q = xcc.shape
     glob = np.concatenate([coef.reshape(-1, m, m_q), xcc[None]])          # (K+1, m, m_q)
     n = DEGREE + 1
-    g = np.cos(np.pi * (np.arange(n) + 0.5) / n)             # local Chebyshev-Gauss nodes
-    to_coef = np.linalg.inv(cheb.chebvander(g, n - 1))       # values at g -> coefficients
+    g = chebyshev.gauss_nodes(-1.0, 1.0, n)[0]               # local Chebyshev-Gauss nodes
     out = []
     for i in range(P_PATCHES):
         vp = cheb.chebvander(-1.0 + (2 * i + 1 + g) / P_PATCHES, m - 1)          # (n, m)
         for j in range(Q_PATCHES):
             vq = cheb.chebvander(-1.0 + (2 * j + 1 + g) / Q_PATCHES, m_q - 1)
             vals = np.einsum("kab,ia,jb->kij", glob, vp, vq)
-            out.append(np.einsum("kij,ai,bj->kab", vals, to_coef, to_coef)
-                       .reshape(glob.shape[0], n * n))
+            local = chebyshev.to_chebyshev(chebyshev.to_chebyshev(vals, g, axis=1), g, axis=2)
+            out.append(local.reshape(glob.shape[0], n * n))
     table[_KEY] = np.ascontiguousarray(np.stack(out))
     return table[_KEY]
 

@@ -68,4 +68,3 @@ def evaluate(table: dict[str, np.ndarray], rows: jnp.ndarray, xc_cheb: jnp.ndarr
 
     return f(jnp.asarray(xs, float), jnp.asarray(nu, float), jnp.asarray(pre, float),
              jnp.asarray(rows, float), jnp.asarray(xc_cheb, float))
-

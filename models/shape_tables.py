@@ -120,6 +120,11 @@ class ShapeTable:
     m_q: int = 0
     kink_c1: bool = False  # the adhesive laws' backbone has a corner at x_c (surrogate doc)
 
+    def kw(self, s, t=None) -> dict:
+        """The reference contact's keywords at shape parameter s (and t, the second one,
+        where the table has it)."""
+        return self.reference_kw(s) if self.q_range is None else self.reference_kw(s, t)
+
 
 TABLES: dict[str, ShapeTable] = {
     "jkr": ShapeTable("jkr", lambda r: _jkr_kw(r, 3.0 * np.pi), float(np.log(0.3)),
@@ -173,7 +178,7 @@ def exact_backbone(name: str, x: ArrayLike, s: ArrayLike, nodes: int = 48,
         law, tab = _law(name), TABLES[name]
 
         def one(xi, si, ti):
-            kw = tab.reference_kw(si) if tab.q_range is None else tab.reference_kw(si, ti)
+            kw = tab.kw(si, ti)
             return backbone_shift(law, xi, delta0=law.overlap(**kw), nodes=nodes, **kw)
 
         _EXACT[(name, nodes)] = jax.jit(jax.vmap(one))
@@ -188,8 +193,7 @@ def spec(name: str) -> surrogate.BackboneSpec:
     tab = TABLES[name]
 
     def ref(p, q):
-        return (tab.reference_kw(jnp.exp(p)) if tab.q_range is None
-                else tab.reference_kw(jnp.exp(p), jnp.exp(q)))
+        return tab.kw(jnp.exp(p), jnp.exp(q))
 
     @jax.jit
     @jax.vmap
@@ -203,8 +207,11 @@ def spec(name: str) -> surrogate.BackboneSpec:
         law, kw = _law(name), ref(p, q)
         return lindstedt_coefficient(law, delta0=law.overlap(**kw), **kw)
 
+    def zero(p, q):   # a table without a second coordinate passes none: any value serves
+        return np.zeros_like(p) if q is None else q
+
     def exact(x, p, xc, q=None):
-        q = np.zeros_like(p) if q is None else q
+        q = zero(p, q)
         out = np.empty_like(x)
         size = 128  # bounded memory per batch; the last batch is padded (one compile)
         for i in range(0, x.size, size):
@@ -214,7 +221,6 @@ def spec(name: str) -> surrogate.BackboneSpec:
                                                      nodes=_BUILD_NODES, t=np.exp(qs)))[:n]
         return out
 
-    zero = lambda p, q: np.zeros_like(p) if q is None else q
     return surrogate.BackboneSpec(
         p_lo=tab.p_lo, p_hi=tab.p_hi, exact=exact,
         kink=lambda p, q=None: tuple(np.asarray(v) for v in kink(jnp.asarray(p),

@@ -64,6 +64,8 @@ __all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "ch
 
 chebyshev_basis = chebyshev.basis
 """T_0..T_{m-1}(nu) (:func:`models.chebyshev.basis`; kept under this name)."""
+to_chebyshev = chebyshev.to_chebyshev
+"""Values on Chebyshev-Gauss nodes -> coefficients (:func:`models.chebyshev.to_chebyshev`)."""
 
 X_MAX = 2.0
 """The largest x = delta_a/delta0 [-] every backbone table covers (the bead flies over
@@ -102,26 +104,12 @@ class BackboneSpec:
 
 def chebyshev_nodes(spec: BackboneSpec) -> tuple[np.ndarray, np.ndarray]:
     """Chebyshev-Gauss nodes nu_j in (-1, 1) and p_j (no node at the domain ends)."""
-    return _gauss_nodes(spec.p_lo, spec.p_hi, spec.m_cheb)
-
-
-def _gauss_nodes(lo: float, hi: float, m: int) -> tuple[np.ndarray, np.ndarray]:
-    nu = np.cos(np.pi * (np.arange(m) + 0.5) / m)
-    return nu, 0.5 * (lo + hi) + nu * (hi - lo) / 2.0
+    return chebyshev.gauss_nodes(spec.p_lo, spec.p_hi, spec.m_cheb)
 
 
 def _knots(k: int) -> tuple[np.ndarray, np.ndarray]:
     s = np.linspace(0.0, 1.0, k)
     return p_cells.contact_knot(s), p_cells.flight_knot(s)
-
-
-def to_chebyshev(values: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """Values on the Chebyshev-Gauss nodes nu (last axis) -> Chebyshev coefficients."""
-    m = values.shape[-1]
-    t = np.cos(np.outer(np.arange(m), np.arccos(nu)))  # T_k(nu_j)
-    coef = values @ t.T * (2.0 / m)
-    coef[..., 0] /= 2.0
-    return coef
 
 
 def spline_coefficients(knots: np.ndarray, data: np.ndarray,
@@ -220,7 +208,7 @@ def _build_two(spec: BackboneSpec) -> dict[str, np.ndarray]:
     if spec.p_cells or spec.m_q < 1:
         raise ValueError("a table with a second shape coordinate needs m_q >= 1 and no "
                          "p_cells (it is read at one (p, q) for all points)")
-    nu, qs = _gauss_nodes(*spec.q_range, spec.m_q)
+    nu, qs = chebyshev.gauss_nodes(*spec.q_range, spec.m_q)
     parts = []
     for q in qs:
         at = lambda a, q=q: np.full(np.shape(a), q)

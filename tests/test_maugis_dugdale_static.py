@@ -72,3 +72,12 @@ def test_law_overlap_maps_are_the_root_solves(gamma, lam):
     np.testing.assert_allclose(d0, md.overlap_from_frequency(f0, LOAD, MASS, radius=R_BEAD,
                                                              gamma=gamma, lam=lam), rtol=1e-12)
     np.testing.assert_allclose(law.frequency_at(d0, **kw), f0, rtol=1e-13)
+
+
+def test_stored_table_is_what_the_builder_makes():
+    """models/data/md_static.npz is reproduced by a fresh build (the node and coefficient
+    helpers of models.chebyshev it shares with the backbone tables): within 1e-13."""
+    fresh, stored = st.build(), st.load()
+    assert set(fresh) == set(stored)
+    for k in fresh:
+        np.testing.assert_allclose(fresh[k], stored[k], rtol=0.0, atol=1e-13)
