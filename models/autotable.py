@@ -26,7 +26,7 @@ from .law import ContactLaw, Prior, prior_median
 
 __all__ = ["shape_invariant", "attach_fast_backbone"]
 
-_Q = jnp.array([-0.95, -0.6, -0.2, 0.3, 1.0, 2.5])
+_Q = np.array([-0.95, -0.6, -0.2, 0.3, 1.0, 2.5])   # numpy: no JAX array on import
 _TOL = 1e-9
 _KNOTS = 40   # per region: 1e-7 of the exact curve for a Hertz law (tests/test_lawfile.py)
 _NODES = 24   # orbit rule of the samples (spectral on the contact arc, as models.shape_tables)

@@ -49,7 +49,9 @@ __all__ = ["reduced_oscillator", "restoring_force", "angle_grid", "log_angle_fro
 
 _GRID = 512
 _NEWTON = 4
-_GL_T, _GL_W = (jnp.asarray(v) for v in np.polynomial.legendre.leggauss(16))
+# numpy (float64) here, made JAX arrays where used: a jnp array created on import would
+# be float32 whenever float64 is switched on after the import (it is set at entry points)
+_GL_T, _GL_W = np.polynomial.legendre.leggauss(16)
 
 
 def _delta(th, lam):
