@@ -112,7 +112,9 @@ class Param:
 
     ``display`` = (unit, scale): how tables show it (e.g. ('GPa', 1e9)). ``scene_key``:
     the scene quantity that gives its nominal value (``beadrod shift`` uses it when the
-    parameter is not given; otherwise the prior median).
+    parameter is not given; otherwise the prior median). ``domain``: [lo, hi], the values
+    for which the law's functions are defined (outside them they return NaN, and
+    ``beadrod shift`` refuses them); None: every value its prior's kind allows.
     """
 
     name: str
@@ -122,6 +124,7 @@ class Param:
     description: str
     display: tuple[str, float] | None = None
     scene_key: str | None = None
+    domain: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,12 +257,14 @@ class ContactLaw:
         """Overlap [m] at which contact is lost (0 unless the law is adhesive)."""
         return 0.0 if self.contact_edge is None else self.contact_edge(**kw)
 
-    def shift(self, x: Any, *, rung: str, **kw: Any) -> Any:
+    def shift(self, x: Any, *, rung: str, fast: bool = True, **kw: Any) -> Any:
         """Delta f/f0 [-] at x = delta_a/delta0 on ``rung``.
 
         ``kw`` are resolved keywords plus ``delta0`` [m] (the overlap x refers to; the
         law's static overlap under ``load`` when absent) and ``omega0`` [rad/s].
-        A fast path is used when the law has one; otherwise the generic quadrature of
+        A fast path is used when the law has one and ``fast`` (outside its domain,
+        :meth:`in_domain`, it holds a value that is not the law's); otherwise the generic
+        quadrature of
         :mod:`models.generic` (exact, but far too slow for a sampler), or for 'series',
         'harmonic_balance' and 'time_integration' :mod:`models.generic_dynamics` (options
         ``q_factor``, ``harmonics``, ... there).
@@ -267,7 +272,7 @@ class ContactLaw:
         if rung not in self.rungs:
             raise RungUnavailable(
                 f"law '{self.name}' has no rung {rung!r}; its rungs are {list(self.rungs)}")
-        fn = self.shifts.get(rung)
+        fn = self.shifts.get(rung) if fast else None
         if fn is not None:
             return fn(jnp.asarray(x, float), **kw)
         from . import generic
@@ -306,7 +311,8 @@ class ContactLaw:
             "source": self.source, "rungs": list(self.rungs), "predicts_q": self.predicts_q,
             "description": self.description,
             "params": [{"name": p.name, "unit": p.unit, "label": p.label,
-                        "description": p.description, "prior": _prior_text(p)}
+                        "description": p.description, "prior": _prior_text(p),
+                        "domain": None if p.domain is None else list(p.domain)}
                        for p in self.params],
         }
 

@@ -68,7 +68,9 @@ def _law():
                 "Maugis transition parameter lambda = sigma0 (9R/(2 pi w E*^2))^(1/3). Prior "
                 "LogUniform(0.1, 100): from DMT-like (lambda < 0.1) to JKR-like (> 5) "
                 "contacts; a Lennard-Jones gap z0 = 0.4 nm gives lambda ~ 30 for the paper's "
-                "bead.")
+                "bead. The law is defined on the prior's range only (its static state is "
+                "tabulated there, models.maugis_dugdale_static; NaN outside).",
+                domain=(0.1, 100.0))
 
     def ratio(kw):
         return static.load_ratio(kw["load"], radius=kw["radius"], gamma=kw["gamma"],
@@ -86,8 +88,8 @@ def _law():
         params=(YOUNG, GAMMA, lam),
         force=lambda delta, *, e_star, radius, gamma, lam, **_: force(
             delta, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
-        # the static state from tables in (F0/Fc, lam) (models.maugis_dugdale_static;
-        # the root solves of this module outside them)
+        # the static state from tables in (F0/Fc, lam) (models.maugis_dugdale_static:
+        # every load, lam on the law's domain; no root solve in a sampler's program)
         static_overlap=lambda *, load, e_star, radius, gamma, lam, **_: static.static_overlap(
             load, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
         # the elastic scale E* R^(1/2) scatters between mounts, not the adhesion (as JKR)

@@ -1,26 +1,38 @@
-"""The Maugis-Dugdale static state under the load, tabulated: the sampler's overlap maps.
+"""The Maugis-Dugdale static state under the load, tabulated: the law's overlap maps.
 
 Why. At a load F0 > 0 the reduced state of a Maugis-Dugdale contact (module
 :mod:`models.maugis_dugdale`) follows from two numbers, the load ratio r = F0/Fc (Fc =
 -Pbar_c(lam) pi w R, the load-controlled pull-off force) and Maugis' lam: theta0 =
 theta(Pbar0, lam) with Pbar0 = F0/(pi w R) = -r Pbar_c(lam). The exact maps need two
 bracketed root solves (pull-off angle, then the load's angle; 120 Newton steps), hundreds
-of microseconds inside a sampler's step. Tabulated here, as Chebyshev interpolants:
+of microseconds inside a sampler's step, and their compiled programs (with derivatives)
+took 4 s each to build: a sampler's log density calls the maps at ten sites. Tabulated
+here, as Chebyshev interpolants, on the whole load range r in (0, inf) for every lam of
+the law's parameter range :data:`LAM_RANGE` (its prior's support):
 
     Pbar_c(lam)                                  [-]  (pull-off, -2 .. -3/2),
     ln n(r, lam),     n = Delta0 k0 / Pbar0      [-]  (delta0 = n F0/(m omega0^2)),
     ln D(r, lam),     D = Delta0 / Pbar0^(2/3)   [-]  (delta0 = d_s Delta0),
 
 k0 = dPbar/dDelta at the state. n is the law's "effective exponent" (3/2 for Hertz, which
-both n and D reach as r -> inf); the f0 -> overlap map of :mod:`models.maugis_dugdale`
+n and D = 1 reach as r -> inf); the f0 -> overlap map of :mod:`models.maugis_dugdale`
 (the elastic scale scatters, not the adhesion) is delta0 = n F0/(m omega0^2) exactly.
 
-Grid: ln r in [ln 0.3, ln 1000] (the backbone table's range) in two pieces split at ln 10,
-ln lam in [ln 0.1, ln 100] (the prior's range) in three split at ln lam = -1 and 1 (the
-DMT-JKR transition, where one interpolant converged slowly), 24 x 24 Chebyshev terms per
-piece; Pbar_c in the same three pieces of ln lam. Measured against the root solves at
-random points (tests/test_maugis_dugdale_static.py): all three within 1e-13 (3e-14 at
-2000 points). Outside the grid the exact root solves are used (:func:`state`).
+Pieces in r, each in the coordinate in which the state is smooth up to its end:
+
+* r in (0, 0.3], in r itself: n r and D r^(2/3) (tabulated as ln n + ln r and
+  ln D + (2/3) ln r) tend to the zero-load state's values, a regular point (the nearest
+  singularity is pull-off, r = -1);
+* r in [0.3, 10] and [10, 1000], in ln r;
+* r in [1000, inf), in w = r^(-1/2) in [0, 1000^(-1/2)]: the state tends to Hertz's as
+  ln n - ln(3/2) ~ 0.6 w^2 (w^3 next; measured from the root solves up to r = 1e12).
+
+lam in [0.1, 100] in three pieces of ln lam split at -1 and 1 (the DMT-JKR transition),
+24 x 24 Chebyshev terms per piece; Pbar_c in the same three pieces. Measured against the
+root solves at random points in every piece (tests/test_maugis_dugdale_static.py): within
+1e-13. Outside :data:`LAM_RANGE`, or at a load r <= 0, the maps return NaN: lam is a
+parameter of the law only on its prior's support (``beadrod shift`` refuses other values);
+:func:`exact_state` (the root solves) takes any lam.
 
 Regenerate (seconds)::
 
@@ -29,10 +41,8 @@ Regenerate (seconds)::
 
 from __future__ import annotations
 
-import functools
 import math
 import pathlib
-from functools import partial
 
 import jax
 import jax.numpy as jnp
@@ -43,18 +53,19 @@ from . import chebyshev
 from . import maugis_dugdale_contact as md
 from ._tables import rebuild_cli
 
-__all__ = ["TABLE_PATH", "R_RANGE", "LAM_RANGE", "build", "load", "pull_off", "load_ratio",
+__all__ = ["TABLE_PATH", "R_EDGES", "LAM_RANGE", "build", "load", "pull_off", "load_ratio",
            "state", "exact_state", "in_range", "static_overlap", "overlap_from_frequency",
            "frequency_from_overlap"]
 
 TABLE_PATH = pathlib.Path(__file__).with_name("data") / "md_static.npz"
-R_RANGE = (0.3, 1000.0)
-"""The load ratios r = F0/Fc [-] tabulated (the Maugis-Dugdale backbone table's range)."""
+R_EDGES = (0.3, 10.0, 1000.0)
+"""The load ratios r = F0/Fc [-] where the pieces in r meet (module doc)."""
 LAM_RANGE = (0.1, 100.0)
 """The lam [-] tabulated (the law's prior range)."""
-_P_EDGES = (math.log(R_RANGE[0]), math.log(10.0), math.log(R_RANGE[1]))
 _Q_EDGES = (math.log(LAM_RANGE[0]), -1.0, 1.0, math.log(LAM_RANGE[1]))
+_W_MAX = R_EDGES[-1] ** -0.5
 _M = 24
+_TINY = 1e-300
 _TABLE: dict[str, np.ndarray] = {}
 
 
@@ -69,28 +80,50 @@ def exact_state(r: ArrayLike, lam: ArrayLike) -> tuple[jnp.ndarray, ...]:
             jnp.log(d0) - (2.0 / 3.0) * jnp.log(pbar), pc)
 
 
+def _piece_nodes(k: int, nu: np.ndarray) -> np.ndarray:
+    # the load ratios r at local coordinates nu of r-piece k (inverse of _r_coordinate)
+    lo, hi = _piece_span(k)
+    c = 0.5 * (lo + hi) + 0.5 * (hi - lo) * nu
+    return {0: c, 3: c ** -2.0}.get(k, np.exp(c))
+
+
+def _piece_span(k: int) -> tuple[float, float]:
+    # piece k's range in its own coordinate: r, ln r, ln r, w = r^(-1/2)
+    if k == 0:
+        return 0.0, R_EDGES[0]
+    if k == 3:
+        return 0.0, _W_MAX
+    return math.log(R_EDGES[k - 1]), math.log(R_EDGES[k])
+
+
+def _offset(k: int, r: np.ndarray) -> np.ndarray:
+    # what is added to ln n in piece k (ln r on the first, where n ~ 1/r; else 0)
+    return np.log(r) if k == 0 else np.zeros_like(r)
+
+
 def _coefficients(values: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    # the tensor-product interpolant: along ln r, then along ln lam
+    # the tensor-product interpolant: along r's coordinate, then along ln lam
     return chebyshev.to_chebyshev(chebyshev.to_chebyshev(values, nu, axis=0), nu, axis=1)
 
 
 def build() -> dict[str, np.ndarray]:
     """The Chebyshev coefficients on every piece (deterministic)."""
-    fn = jax.jit(jax.vmap(lambda p, q: exact_state(jnp.exp(p), jnp.exp(q))))
+    fn = jax.jit(jax.vmap(lambda r, q: exact_state(r, jnp.exp(q))))
     nu = chebyshev.gauss_nodes(-1.0, 1.0, _M)[0]
-    ln_n = np.empty((len(_P_EDGES) - 1, len(_Q_EDGES) - 1, _M, _M))
+    ln_n = np.empty((len(R_EDGES) + 1, len(_Q_EDGES) - 1, _M, _M))
     ln_d = np.empty_like(ln_n)
     pc = np.empty((len(_Q_EDGES) - 1, _M))
-    for i, (a, b) in enumerate(zip(_P_EDGES[:-1], _P_EDGES[1:])):
+    for i in range(len(R_EDGES) + 1):
         for j, (c, d) in enumerate(zip(_Q_EDGES[:-1], _Q_EDGES[1:])):
-            pp, qq = np.meshgrid(chebyshev.gauss_nodes(a, b, _M)[1],
-                                 chebyshev.gauss_nodes(c, d, _M)[1], indexing="ij")
-            vals = [np.asarray(v).reshape(pp.shape)
-                    for v in fn(jnp.asarray(pp.ravel()), jnp.asarray(qq.ravel()))]
-            ln_n[i, j] = _coefficients(vals[0], nu)
-            ln_d[i, j] = _coefficients(vals[1], nu)
+            rr, qq = np.meshgrid(_piece_nodes(i, nu), chebyshev.gauss_nodes(c, d, _M)[1],
+                                 indexing="ij")
+            vals = [np.asarray(v).reshape(rr.shape)
+                    for v in fn(jnp.asarray(rr.ravel()), jnp.asarray(qq.ravel()))]
+            off = _offset(i, rr)
+            ln_n[i, j] = _coefficients(vals[0] + off, nu)
+            ln_d[i, j] = _coefficients(vals[1] + (2.0 / 3.0) * off, nu)
             pc[j] = chebyshev.to_chebyshev(vals[2][0], nu)
-    return {"p_edges": np.asarray(_P_EDGES), "q_edges": np.asarray(_Q_EDGES),
+    return {"r_edges": np.asarray(R_EDGES), "q_edges": np.asarray(_Q_EDGES),
             "ln_n": ln_n, "ln_d": ln_d, "pull_off": pc}
 
 
@@ -102,72 +135,51 @@ def load() -> dict[str, np.ndarray]:
     return _TABLE
 
 
-def _locate(z, edges):
-    # (piece, local coordinate in [-1, 1]); clamped to the end pieces
-    e = np.asarray(edges)
-    k = sum((z >= b).astype(jnp.int32) for b in e[1:-1])
-    lo, hi = jnp.asarray(e)[k], jnp.asarray(e)[k + 1]
-    return k, jnp.clip((2.0 * z - (lo + hi)) / (hi - lo), -1.0, 1.0)
+def _lam_coordinate(lam):
+    # (piece, local coordinate in [-1, 1]) of ln lam. Outside the range lam is replaced by
+    # an inside value (callers mask the result), not clamped: a clamp would halve the
+    # derivative at the range's ends
+    z = jnp.log(jnp.where(_valid(lam), lam, 1.0))
+    k = sum((z >= b).astype(jnp.int32) for b in _Q_EDGES[1:-1])
+    e = jnp.asarray(_Q_EDGES)
+    lo, hi = e[k], e[k + 1]
+    return k, (2.0 * z - (lo + hi)) / (hi - lo)
 
 
-def _pull_off_table(lam):
-    t = load()
-    k, nu = _locate(jnp.log(lam), t["q_edges"])
-    return jnp.sum(jnp.asarray(t["pull_off"])[k] * chebyshev.basis(nu, _M), axis=-1)
+def _r_coordinate(r):
+    # (piece, local coordinate in [-1, 1], ln-n offset) of the load ratio r > 0. Each piece's
+    # coordinate is formed from r masked into its own range (double where), so that the
+    # unused ones (ln r at r -> 0, r^(-1/2)) give no infinite derivative to the others
+    k = sum((r >= b).astype(jnp.int32) for b in R_EDGES)
+    r_mid = jnp.where((k == 1) | (k == 2), r, 1.0)
+    r_far = jnp.where(k == 3, r, R_EDGES[-1])
+    r_low = jnp.where(k == 0, jnp.maximum(r, _TINY), 1.0)
+    spans = [_piece_span(i) for i in range(len(R_EDGES) + 1)]
+    coords = [r, jnp.log(r_mid), jnp.log(r_mid), r_far ** -0.5]
+    nu = sum(jnp.where(k == i, (2.0 * c - (lo + hi)) / (hi - lo), 0.0)
+             for i, (c, (lo, hi)) in enumerate(zip(coords, spans)))
+    return k, nu, jnp.where(k == 0, jnp.log(r_low), 0.0)
+
+
+def _valid(lam, *more):
+    ok = (lam >= LAM_RANGE[0] * (1 - 1e-12)) & (lam <= LAM_RANGE[1] * (1 + 1e-12))
+    for m in more:
+        ok = ok & m
+    return ok
 
 
 def in_range(r: ArrayLike, lam: ArrayLike) -> jnp.ndarray:
-    """True where (r, lam) lies on the tabulated grid (:data:`R_RANGE`, :data:`LAM_RANGE`)."""
-    r, lam = jnp.asarray(r, float), jnp.asarray(lam, float)
-    return ((r >= R_RANGE[0]) & (r <= R_RANGE[1]) & (lam >= LAM_RANGE[0] * (1 - 1e-12))
-            & (lam <= LAM_RANGE[1] * (1 + 1e-12)))
-
-
-def _choose(inside_fn, table_fn, exact_fn, *args):
-    # one scalar point (the sampler's case): only the branch taken runs; arrays: both
-    if all(jnp.ndim(a) == 0 for a in args):
-        return _cond(inside_fn, table_fn, exact_fn, *(jnp.asarray(a, float) for a in args))
-    inside = inside_fn(*args)
-    return jax.tree_util.tree_map(lambda a, b: jnp.where(inside, a, b), table_fn(*args),
-                                  exact_fn(*args))
-
-
-@partial(jax.custom_jvp, nondiff_argnums=(0, 1, 2))
-def _cond(inside_fn, table_fn, exact_fn, *args):
-    return jax.lax.cond(inside_fn(*args), table_fn, exact_fn, *args)
-
-
-@functools.cache
-def _with_jacobian(fn):
-    # one function object per branch: eager calls (the fold's probes) reuse the compiled
-    # branches instead of tracing new closures at every call
-    return lambda *a: (fn(*a), jax.jacfwd(fn, argnums=tuple(range(len(a))))(*a))
-
-
-@_cond.defjvp
-def _cond_jvp(inside_fn, table_fn, exact_fn, primals, tangents):
-    # Why a rule of its own: differentiated through, lax.cond makes every gradient carry
-    # the residuals of both branches (the root solves' too: 60 of a 65 us gradient of the
-    # overlap map). Here the branch taken returns its values and its Jacobian in the
-    # scalar arguments, and the tangent is formed outside the cond.
-    out, jac = jax.lax.cond(inside_fn(*primals), _with_jacobian(table_fn),
-                            _with_jacobian(exact_fn), *primals)
-    # jac: out's structure, each leaf a tuple of its derivatives in the arguments
-    tan = jax.tree_util.tree_map(
-        lambda cols: sum(c * t for c, t in zip(cols, tangents)), jac,
-        is_leaf=lambda v: isinstance(v, tuple) and not any(isinstance(e, tuple) for e in v))
-    return out, tan
-
-
-def _lam_inside(lam):
-    return (lam >= LAM_RANGE[0] * (1 - 1e-12)) & (lam <= LAM_RANGE[1] * (1 + 1e-12))
+    """True where the tables give the state: r > 0 and lam in :data:`LAM_RANGE`."""
+    return _valid(jnp.asarray(lam, float), jnp.asarray(r, float) > 0.0)
 
 
 def pull_off(lam: ArrayLike) -> jnp.ndarray:
-    """Pbar_c(lam) = min Pbar [-] (models.maugis_dugdale.reduced_pull_off), tabulated on
-    :data:`LAM_RANGE`, the root solve elsewhere."""
+    """Pbar_c(lam) = min Pbar [-] (models.maugis_dugdale.reduced_pull_off), from its table;
+    NaN outside :data:`LAM_RANGE`."""
     lam = jnp.asarray(lam, float)
-    return _choose(_lam_inside, _pull_off_table, md.reduced_pull_off, lam)
+    k, nu = _lam_coordinate(lam)
+    value = jnp.sum(jnp.asarray(load()["pull_off"])[k] * chebyshev.basis(nu, _M), axis=-1)
+    return jnp.where(_valid(lam), value, jnp.nan)
 
 
 def load_ratio(load: ArrayLike, *, radius: ArrayLike, gamma: ArrayLike,
@@ -177,20 +189,19 @@ def load_ratio(load: ArrayLike, *, radius: ArrayLike, gamma: ArrayLike,
     return jnp.asarray(load, float) / (-pull_off(lam) * fs)
 
 
-def _state_table(r, lam):
-    t = load()
-    i, nu_p = _locate(jnp.log(r), t["p_edges"])
-    j, nu_q = _locate(jnp.log(lam), t["q_edges"])
-    tp, tq = chebyshev.basis(nu_p, _M), chebyshev.basis(nu_q, _M)
-    pick = lambda c: jnp.einsum("...a,...ab,...b->...", tp, jnp.asarray(c)[i, j], tq)
-    return pick(t["ln_n"]), pick(t["ln_d"]), _pull_off_table(lam)
-
-
 def state(r: ArrayLike, lam: ArrayLike) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
-    """(ln n, ln D, Pbar_c) [-] at load ratio r and lam (module doc): the tables on their
-    grid, the exact root solves elsewhere. Differentiable in both."""
-    r, lam = jnp.asarray(r, float), jnp.asarray(lam, float)
-    return _choose(in_range, _state_table, exact_state, r, lam)
+    """(ln n, ln D, Pbar_c) [-] at load ratio r and lam (module doc), from the tables;
+    NaN where r <= 0 or lam is outside :data:`LAM_RANGE`. Differentiable in both."""
+    r, lam = jnp.broadcast_arrays(jnp.asarray(r, float), jnp.asarray(lam, float))
+    t = load()
+    i, nu_r, off = _r_coordinate(jnp.where(r > 0.0, r, 1.0))
+    j, nu_q = _lam_coordinate(lam)
+    tp, tq = chebyshev.basis(nu_r, _M), chebyshev.basis(nu_q, _M)
+    pick = lambda c: jnp.einsum("...a,...ab,...b->...", tp, jnp.asarray(c)[i, j], tq)
+    ok = _valid(lam, r > 0.0)
+    mask = lambda v: jnp.where(ok, v, jnp.nan)
+    return (mask(pick(t["ln_n"]) - off), mask(pick(t["ln_d"]) - (2.0 / 3.0) * off),
+            pull_off(lam))
 
 
 def static_overlap(load: ArrayLike, *, e_star: ArrayLike, radius: ArrayLike,

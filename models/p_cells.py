@@ -196,15 +196,24 @@ def value_and_tangent(inside, xs, d, xc, dxc, c, dc, pre, x_max, txs, tp, tpre):
         flight:  F_x = y_d / (x_max - x_c),
                  F_p = y_p + y_d (x - x_max) x_c' / (x_max - x_c)^2.
 
-    Written out because autodiff of the lookup re-derives the cell search inside several
-    reductions (and, at one p for all points, scatters into the knot array): on the CPU
-    that cost two to three times the value (:mod:`models.scalar_shape`).
+    A table with two shape coordinates passes ``dxc``, ``dc`` and ``tp`` as tuples, one
+    entry each (F_p for each, each times its tangent). Written out because autodiff of
+    the lookup re-derives the cell search inside several reductions (and, at one p for
+    all points, scatters into the knot array): on the CPU that cost two to three times
+    the value (:mod:`models.scalar_shape`). Why the partials are formed from the primal
+    coefficients and only then multiplied by the tangents: the reverse pass is then one
+    product and sum per coordinate (a per-point coefficient tangent, dc times tp formed
+    first, made it 2.5x costlier: models.pq_patches).
     """
-    y, y_p, y_d = cubic(c, d), cubic(dc, d), cubic_slope(c, d)
+    y, y_d = cubic(c, d), cubic_slope(c, d)
     span = x_max - xc
     x2y = xs * xs * y
     f_x = jnp.where(inside, pre * (2.0 * xs * y + xs * xs * y_d / xc), y_d / span)
-    f_p = jnp.where(inside, pre * xs * xs * (y_p - y_d * xs * dxc / (xc * xc)),
-                    y_p + y_d * (xs - x_max) * dxc / (span * span))
-    f_pre = jnp.where(inside, x2y, 0.0)
-    return jnp.where(inside, pre * x2y, y), f_x * txs + f_p * tp + f_pre * tpre
+    tangent = f_x * txs + jnp.where(inside, x2y, 0.0) * tpre
+    as_tuple = lambda v: v if isinstance(v, tuple) else (v,)  # noqa: E731
+    for a, b, t in zip(as_tuple(dxc), as_tuple(dc), as_tuple(tp)):
+        y_p = cubic(b, d)
+        f_p = jnp.where(inside, pre * xs * xs * (y_p - y_d * xs * a / (xc * xc)),
+                        y_p + y_d * (xs - x_max) * a / (span * span))
+        tangent = tangent + f_p * t
+    return jnp.where(inside, pre * x2y, y), tangent

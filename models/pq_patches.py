@@ -26,8 +26,10 @@ degree 6: 6.7e-7 and 4.6e-7 but 49 terms a step). The tests measure it on the su
 values: below :data:`ERROR`, against the table's own stated 1e-5.
 
 Derivatives by hand (``custom_jvp``), as :mod:`models.scalar_shape`: the patch's three
-contractions (value, d/dnu, d/dnu_q) are matrix-vector products with the patch's
-coefficients, and the per-point tangent is :func:`models.p_cells.value_and_tangent`'s.
+contractions (value, d/dnu, d/dnu_q) are one product of three basis rows with the patch's
+coefficients, and the per-point tangent is :func:`models.p_cells.value_and_tangent`'s,
+with a partial derivative per shape coordinate formed before the tangents enter (one
+core, 672 points, lookup with gradient: 34.8 -> 19.3 us; the value alone 11.7).
 """
 
 from __future__ import annotations
@@ -57,9 +59,9 @@ _KEY = "_pq_patches"
 
 
 def resample(table: dict[str, np.ndarray]) -> np.ndarray:
-    """The patches of ``table``: (P_PATCHES x Q_PATCHES, K + 1, (DEGREE + 1)^2), K = 4 x
-    cells spline coefficients then x_c, the patch's tensor Chebyshev coefficients (p index
-    major) last; computed once and kept in the table dict."""
+    """The patches of ``table``: (P_PATCHES x Q_PATCHES, (DEGREE + 1)^2, K + 1), the
+    patch's tensor Chebyshev coefficients (p index major), then K = 4 x cells spline
+    coefficients and x_c; computed once and kept in the table dict."""
     if _KEY in table:
         return table[_KEY]
     if "p_edges" in table:
@@ -79,7 +81,7 @@ def resample(table: dict[str, np.ndarray]) -> np.ndarray:
             vals = np.einsum("kab,ia,jb->kij", glob, vp, vq)
             local = chebyshev.to_chebyshev(chebyshev.to_chebyshev(vals, g, axis=1), g, axis=2)
             out.append(local.reshape(glob.shape[0], n * n))
-    table[_KEY] = np.ascontiguousarray(np.stack(out))
+    table[_KEY] = np.ascontiguousarray(np.swapaxes(np.stack(out), 1, 2))
     return table[_KEY]
 
 
@@ -103,15 +105,17 @@ def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, nu: jnp.ndarray,
         ip, a = _locate(nu, P_PATCHES)
         iq, b = _locate(nu_q, Q_PATCHES)
         k = materialize(ip * Q_PATCHES + iq)
-        c = jax.lax.dynamic_index_in_dim(coef, k, 0, keepdims=False)        # (K+1, n*n)
+        c = jax.lax.dynamic_index_in_dim(coef, k, 0, keepdims=False)        # (n*n, K+1)
         if not slopes:
-            return c @ jnp.outer(chebyshev.basis(a, n), chebyshev.basis(b, n)).ravel()
+            return jnp.outer(chebyshev.basis(a, n), chebyshev.basis(b, n)).ravel() @ c
         ta, da = chebyshev.basis_and_slope(a, n)
         tb, db = chebyshev.basis_and_slope(b, n)
-        # d a/d nu = P_PATCHES, d b/d nu_q = Q_PATCHES; three matrix-vector products (one
-        # dot with three columns is slower on the CPU, module doc)
-        return (c @ jnp.outer(ta, tb).ravel(), c @ (P_PATCHES * jnp.outer(da, tb).ravel()),
-                c @ (Q_PATCHES * jnp.outer(ta, db).ravel()))
+        # d a/d nu = P_PATCHES, d b/d nu_q = Q_PATCHES; the three rows in one product
+        # with the patch stored (n*n, K+1): 6.3 us against 8.0 for three products with
+        # it stored (K+1, n*n) (one core, the slice's copy included)
+        rows = jnp.stack([jnp.outer(ta, tb).ravel(), P_PATCHES * jnp.outer(da, tb).ravel(),
+                          Q_PATCHES * jnp.outer(ta, db).ravel()])
+        return tuple(rows @ c)
 
     # the patches are an argument, not closed over (see models.scalar_shape.evaluate)
     @jax.custom_jvp
@@ -131,9 +135,8 @@ def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, nu: jnp.ndarray,
         # one gather of the three (primal) coefficient sets; the tangents enter after it,
         # so that the values stay computable without them (linearization)
         g = jnp.stack([c[:-1], c_p[:-1], c_q[:-1]], -1).reshape(-1, 4, 3)[materialize(i)]
-        return value_and_tangent(inside, xs, d, xc, c_p[-1] * tnu + c_q[-1] * tnu_q,
-                                 g[..., 0], g[..., 1] * tnu + g[..., 2] * tnu_q, pre, x_max,
-                                 txs, 1.0, tpre)
+        return value_and_tangent(inside, xs, d, xc, (c_p[-1], c_q[-1]), g[..., 0],
+                                 (g[..., 1], g[..., 2]), pre, x_max, txs, (tnu, tnu_q), tpre)
 
     return f(jnp.asarray(xs, float), jnp.asarray(nu, float), jnp.asarray(nu_q, float),
              jnp.asarray(pre, float), jnp.asarray(patches))

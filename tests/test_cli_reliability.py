@@ -215,6 +215,22 @@ def test_shift_json_is_strict_and_values_are_physical(capsys):
     assert -1.0 < bb < 0.0  # the exact backbone softens past contact loss
 
 
+def test_shift_outside_a_table_is_the_laws_backbone_not_the_held_value(capsys):
+    """JKR at gamma = 9 J/m^2 puts F0/Fc = 0.18 below its backbone table (0.3): the fast
+    path would print the value held at the table's end (2 % off at x = 0.1). The command
+    computes such points by the generic quadrature and says so; checked against the
+    law's own small-amplitude series (x^4 apart: 0.15 % at x = 0.1)."""
+    base = ["shift", "--law", "jkr", "--x", "0.1", "--param", "gamma=9", "--json"]
+    assert main(base + ["--method", "series"]) == 0
+    series = json.loads(capsys.readouterr().out)
+    assert main(base + ["--method", "backbone"]) == 0
+    bb = json.loads(capsys.readouterr().out)
+    assert series["generic_at_x"] == [] and bb["generic_at_x"] == [0.1]
+    assert bb["delta_f_over_f0"][0] == pytest.approx(series["delta_f_over_f0"][0], rel=5e-3)
+    assert main(["shift", "--law", "maugis_dugdale", "--x", "0.5", "--param", "lam=500"]) == 2
+    assert "defined for lam in [0.1, 100]" in capsys.readouterr().err
+
+
 # ----------------------------------------------------------------- progress display
 
 

@@ -29,7 +29,9 @@ def _text(rows: list[dict]) -> str:
         if r["description"]:
             out.append(f"  {r['description']}")
         for p in r["params"]:
-            out.append(f"  - {p['name']} [{p['unit']}]: prior {p['prior']}")
+            dom = "" if p["domain"] is None else (
+                f", defined on [{p['domain'][0]:g}, {p['domain'][1]:g}]")
+            out.append(f"  - {p['name']} [{p['unit']}]: prior {p['prior']}{dom}")
     return "\n".join(out)
 
 

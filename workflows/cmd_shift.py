@@ -188,6 +188,12 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     if unknown:
         raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
                          f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
+    for k, v in given.items():
+        dom = contact.param(k).domain if k in contact.param_names else None
+        if dom is not None and not dom[0] <= v <= dom[1]:
+            raise ValueError(f"{k} = {_fmt(v)}: law '{law}' is defined for {k} in "
+                             f"[{_fmt(dom[0])}, {_fmt(dom[1])}] (its parameter's domain, "
+                             "`beadrod laws`)")
     rung = check_method(contact, method)
     sc = scene_keywords(scene)
     sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
@@ -195,8 +201,17 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
                                                  if k in contact.param_names})
     state = linear_state(contact, sc, theta)
     kw, d0 = state["kw"], state["delta0_m"]
+    xa = np.asarray(xs, float)
     try:
-        values = np.asarray(contact.shift(np.asarray(xs, float), rung=rung, **kw), float)
+        values = np.array(contact.shift(xa, rung=rung, **kw), float)
+        # outside its domain (a table's range) a fast path holds a value that is not the
+        # law's: those points are computed by the generic quadrature instead (exact, slow)
+        inside = contact.in_domain(xa, rung=rung, **kw)
+        outside = (np.zeros(xa.shape, bool) if inside is None
+                   else ~np.broadcast_to(np.asarray(inside, bool), xa.shape))
+        if outside.any():
+            values[outside] = np.asarray(contact.shift(xa[outside], rung=rung, fast=False,
+                                                       **kw), float)
     except RuntimeError as exc:  # a forced-response solve that did not converge
         raise ValueError(f"law '{law}' ({rung}): {exc}") from None
     bad = [xv for xv, v in zip(xs, np.atleast_1d(values)) if not np.isfinite(v)]
@@ -206,7 +221,8 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     out = {"law": law, "method": rung, "rung": rung, "scene": scene.name, "x": xs,
            "delta_f_over_f0": [float(v) for v in np.atleast_1d(values)],
            "params": {k: float(v) for k, v in theta.items()}, "sources": sources,
-           "delta0_m": float(d0), "f0_Hz": state["f0_Hz"]}
+           "delta0_m": float(d0), "f0_Hz": state["f0_Hz"],
+           "generic_at_x": [float(v) for v in xa[outside]]}
     if "n" in theta:
         out["n"] = theta["n"]
     return out
@@ -228,6 +244,10 @@ def _run(args: argparse.Namespace) -> int:
     print(f"law {table['law']}, rung {table['rung']}, scene {table['scene']}")
     for k, v in table["params"].items():
         print(f"  {k} = {v:.6g} ({table['sources'][k]})")
+    if table["generic_at_x"]:
+        print("  outside the fast path's table at x = "
+              + ", ".join(map(_fmt, table["generic_at_x"]))
+              + ": computed there by the generic quadrature")
     print(f"{'x = delta_a/delta0':>20}  {'Delta f/f0':>14}")
     for xv, v in zip(table["x"], table["delta_f_over_f0"]):
         print(f"{xv:>20.6g}  {v:>14.8f}")
