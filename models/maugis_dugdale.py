@@ -82,9 +82,7 @@ def _law():
         description=("adhesion between the JKR and DMT limits (Dugdale cohesive zone); its "
                      "backbone is a table in (F0/Fc, lambda), its first order the generic "
                      "quadrature (exact, slow in a sampler); contact is taken to part at "
-                     "delta = 0, as for JKR and DMT; not in the default comparison (a NUTS "
-                     "step costs 5.7x Hertz's and its programs compile for minutes: fit it "
-                     "by name)"),
+                     "delta = 0, as for JKR and DMT"),
         params=(YOUNG, GAMMA, lam),
         force=lambda delta, *, e_star, radius, gamma, lam, **_: force(
             delta, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
@@ -107,13 +105,11 @@ def _law():
         # value is not this law's backbone: the inference counts no point there
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                       kw["lam"])},
+        # a cold fit's relative wall time (35 s on the embedded data against Hertz's ~7):
+        # started first. Measured one core: 60 us per NUTS step against Hertz's 13 (the
+        # backbone read at every sweep point: its shape depends on two parameters, so
+        # inference.fold does not fold it), ESS/s 0.14 of Hertz's sampling alone
         cost=5.0,
-        # measured on the embedded data, one core: 76 us per NUTS step against Hertz's 13
-        # (the backbone on (p, q) patches, models.pq_patches: 180 us before), ESS/s 0.14 of
-        # Hertz's, below the 1/3 a law of the default comparison must reach; and a cold fit
-        # by name takes ~3.5 min, mostly compiling the static map's exact fallback (the
-        # root solves outside its tables): it would put the default comparison past 5 min
-        in_default_comparison=False,
     )
 
 
