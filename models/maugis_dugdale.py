@@ -64,13 +64,13 @@ def _law():
     from .law import GAMMA, YOUNG, ContactLaw, Param, Prior
     from .shape_backbone import backbone_fast, in_table
 
-    lam = Param("lam", "-", r"$\lambda$", Prior("loguniform", 0.1, 100.0),
+    lam = Param("lam", "-", r"$\lambda$", Prior("loguniform", *static.LAM_RANGE),
                 "Maugis transition parameter lambda = sigma0 (9R/(2 pi w E*^2))^(1/3). Prior "
                 "LogUniform(0.1, 100): from DMT-like (lambda < 0.1) to JKR-like (> 5) "
                 "contacts; a Lennard-Jones gap z0 = 0.4 nm gives lambda ~ 30 for the paper's "
                 "bead. The law is defined on the prior's range only (its static state is "
                 "tabulated there, models.maugis_dugdale_static; NaN outside).",
-                domain=(0.1, 100.0))
+                domain=static.LAM_RANGE)
 
     def ratio(kw):
         return static.load_ratio(kw["load"], radius=kw["radius"], gamma=kw["gamma"],
@@ -108,7 +108,7 @@ def _law():
         # a cold fit's relative wall time (35 s on the embedded data against Hertz's ~7):
         # started first. Measured one core: 60 us per NUTS step against Hertz's 13 (the
         # backbone read at every sweep point: its shape depends on two parameters, so
-        # inference.fold does not fold it), ESS/s 0.14 of Hertz's sampling alone
+        # inference.fold does not fold it), ESS/s 0.14-0.18 of Hertz's sampling alone
         cost=5.0,
     )
 

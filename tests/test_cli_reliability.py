@@ -229,6 +229,8 @@ def test_shift_outside_a_table_is_the_laws_backbone_not_the_held_value(capsys):
     assert bb["delta_f_over_f0"][0] == pytest.approx(series["delta_f_over_f0"][0], rel=5e-3)
     assert main(["shift", "--law", "maugis_dugdale", "--x", "0.5", "--param", "lam=500"]) == 2
     assert "defined for lam in [0.1, 100]" in capsys.readouterr().err
+    assert main(["scene", "--param", "lam=0.01"]) == 2
+    assert "defined for lam in [0.1, 100]" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------- progress display

@@ -29,7 +29,8 @@ from models.rungs import RUNGS
 
 from . import lawfiles
 
-__all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
+__all__ = ["register", "shift_table", "check_x", "check_param", "check_in_domain",
+           "check_method", "X_MAX",
            "METHODS", "PARAM_DOMAINS", "scene_keywords", "nominal_theta", "parse_params"]
 
 X_MAX = 2.0
@@ -99,6 +100,17 @@ def check_param(name: str, value: float) -> float:
         raise ValueError(f"{name} = {_fmt(v)}: {what} must lie in {'(' if open_lo else '['}"
                          f"{_fmt(lo)}, {_fmt(hi)}]{unit}" + (f" ({why})" if why else ""))
     return v
+
+
+def check_in_domain(law: Any, name: str, value: float) -> float:
+    """``value`` if it lies in the domain of ``law``'s parameter ``name`` (its ``domain``,
+    where it has one: the law's functions are NaN outside it); ValueError otherwise."""
+    dom = law.param(name).domain if name in law.param_names else None
+    if dom is not None and not dom[0] <= value <= dom[1]:
+        raise ValueError(f"{name} = {_fmt(value)}: law '{law.name}' is defined for {name} in "
+                         f"[{_fmt(dom[0])}, {_fmt(dom[1])}] (its parameter's domain, "
+                         "`beadrod laws`)")
+    return value
 
 
 def check_method(law: Any, method: str) -> str:
@@ -189,11 +201,7 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
         raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
                          f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
     for k, v in given.items():
-        dom = contact.param(k).domain if k in contact.param_names else None
-        if dom is not None and not dom[0] <= v <= dom[1]:
-            raise ValueError(f"{k} = {_fmt(v)}: law '{law}' is defined for {k} in "
-                             f"[{_fmt(dom[0])}, {_fmt(dom[1])}] (its parameter's domain, "
-                             "`beadrod laws`)")
+        check_in_domain(contact, k, v)
     rung = check_method(contact, method)
     sc = scene_keywords(scene)
     sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
