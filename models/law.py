@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 
 from .rungs import LADDER
 
@@ -291,6 +292,21 @@ class ContactLaw:
             return run(self, x, **kw)
         raise RungUnavailable(f"law '{self.name}': rung {rung!r} has no generic form; "
                               "give it in the law's shifts")
+
+    def shift_everywhere(self, x: Any, *, rung: str, **kw: Any) -> tuple[Any, Any]:
+        """(Delta f/f0 [-], outside) at concrete amplitudes x (numpy, not traced): the fast
+        path where it holds, the generic quadrature where it does not (``outside``, a bool
+        array: there the fast path would hold a value that is not the law's). For commands
+        that print values; a sampler counts no point outside instead (:meth:`in_domain`)."""
+        xa = np.asarray(x, float)
+        values = np.array(self.shift(xa, rung=rung, **kw), float)
+        inside = self.in_domain(xa, rung=rung, **kw)
+        outside = (np.zeros(xa.shape, bool) if inside is None
+                   else ~np.broadcast_to(np.asarray(inside, bool), xa.shape))
+        if outside.any():
+            values[outside] = np.asarray(self.shift(xa[outside], rung=rung, fast=False, **kw),
+                                         float)
+        return values, outside
 
     def in_domain(self, x: Any, *, rung: str, **kw: Any) -> Any:
         """Bool array: True where ``rung``'s fast path holds at x (same keywords as

@@ -84,7 +84,9 @@ def _piece_nodes(k: int, nu: np.ndarray) -> np.ndarray:
     # the load ratios r at local coordinates nu of r-piece k (inverse of _r_coordinate)
     lo, hi = _piece_span(k)
     c = 0.5 * (lo + hi) + 0.5 * (hi - lo) * nu
-    return {0: c, 3: c ** -2.0}.get(k, np.exp(c))
+    if k == 0:
+        return c
+    return c ** -2.0 if k == len(R_EDGES) else np.exp(c)
 
 
 def _piece_span(k: int) -> tuple[float, float]:

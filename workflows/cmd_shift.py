@@ -211,15 +211,9 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     kw, d0 = state["kw"], state["delta0_m"]
     xa = np.asarray(xs, float)
     try:
-        values = np.array(contact.shift(xa, rung=rung, **kw), float)
         # outside its domain (a table's range) a fast path holds a value that is not the
-        # law's: those points are computed by the generic quadrature instead (exact, slow)
-        inside = contact.in_domain(xa, rung=rung, **kw)
-        outside = (np.zeros(xa.shape, bool) if inside is None
-                   else ~np.broadcast_to(np.asarray(inside, bool), xa.shape))
-        if outside.any():
-            values[outside] = np.asarray(contact.shift(xa[outside], rung=rung, fast=False,
-                                                       **kw), float)
+        # law's: the law computes those points by the generic quadrature (exact, slow)
+        values, outside = contact.shift_everywhere(xa, rung=rung, **kw)
     except RuntimeError as exc:  # a forced-response solve that did not converge
         raise ValueError(f"law '{law}' ({rung}): {exc}") from None
     bad = [xv for xv, v in zip(xs, np.atleast_1d(values)) if not np.isfinite(v)]
