@@ -1,5 +1,6 @@
-"""Test configuration: float64 everywhere, as at every beadrod entry point; and a private
-persistent compilation cache.
+"""Test configuration: float64 everywhere, as at every beadrod entry point; XLA's CPU
+backend at optimisation level 0 for the default suite (compiling dominates it); and a
+private persistent compilation cache.
 
 The CLI entry points (run in-process by the tests) turn on JAX's persistent cache, by
 default in the user's ``~/.cache/beadrod/jax``. The tests must neither read what other
@@ -22,6 +23,19 @@ jax.config.update("jax_enable_x64", True)
 if "BEADROD_JAX_CACHE" not in os.environ:
     os.environ["BEADROD_JAX_CACHE"] = os.path.join(tempfile.gettempdir(),
                                                    f"beadrod-test-jax-pid{os.getpid()}")
+
+
+def pytest_configure(config):
+    # XLA's CPU backend without LLVM's optimisation passes for the default suite: it runs
+    # tiny fits and many small programs, so compiling is most of its time (on the 2-core
+    # machine the suite took 15:39 with them, 11:44 without; the numbers are the same
+    # code's to rounding). The slow checks run long chains and keep them. Set before any
+    # backend starts (jax only reads it then), in the controlling process: xdist workers
+    # and the comparison's worker processes inherit it. A caller's own setting is kept.
+    opt = "--xla_backend_optimization_level"
+    if "not slow" in (config.option.markexpr or "") and opt not in os.environ.get(
+            "XLA_FLAGS", ""):
+        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {opt}=0".strip()
 
 
 # Each compiled XLA:CPU program holds a few memory mappings until JAX drops it, and a long

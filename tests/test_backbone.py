@@ -87,7 +87,7 @@ def test_backbone_amplitude_root_is_solved():
     from models.backbone import _qmax_of_x
     xs = jnp.array([0.05, 0.5, 0.95, 1.2, 2.5])
     qm = jax.jit(jax.vmap(lambda x: _qmax_of_x(x, jnp.asarray(1.5), 48)))(xs)
-    a1 = jax.vmap(lambda q: powerlaw_orbit(q)[1])(qm)
+    a1 = jax.jit(jax.vmap(lambda q: powerlaw_orbit(q)[1]))(qm)
     np.testing.assert_allclose(np.asarray(a1), np.asarray(xs), rtol=1e-12)
 
 
@@ -105,7 +105,7 @@ def test_first_order_differs_from_exact_at_small_x():
 def test_backbone_continuous_across_contact_loss():
     # the orbit first leaves contact at qmax where P(qmax) = P(-1); bracket it
     qs = jnp.linspace(0.86, 0.90, 41)
-    om = jax.vmap(lambda q: powerlaw_orbit(q)[0])(qs)
+    om = jax.jit(jax.vmap(lambda q: powerlaw_orbit(q)[0]))(qs)
     assert np.all(np.abs(np.diff(np.asarray(om))) < 2e-3)
     assert np.all(np.diff(np.asarray(om)) < 0)
 
@@ -178,8 +178,8 @@ def test_fine_rules_finite_and_agree_at_contact_loss_onset(n):
     # a zero energy gap), and 48 against 256 nodes differed by up to 1e-5 near the onset
     qc = (n + 1) ** (1 / n) - 1
     qs = jnp.array([0.3, qc - 1e-6, qc * (1 - 1e-12), qc + 1e-9, qc + 1e-6, qc + 0.3])
-    coarse = np.asarray(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 48)[:2]))(qs))
-    fine = np.asarray(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 256)[:2]))(qs))
+    coarse = np.asarray(jax.jit(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 48)[:2])))(qs))
+    fine = np.asarray(jax.jit(jax.vmap(lambda q: jnp.stack(powerlaw_orbit(q, n, 256)[:2])))(qs))
     assert np.all(np.isfinite(fine))
     # (the contact arc ending within 1e-12 of q = -1 carries the weak y^(n+1) branch point
     # of the potential next to its turning point: 48 nodes are within ~1.5e-12 there)

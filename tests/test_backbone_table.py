@@ -34,7 +34,7 @@ REBUILD = [(5, 0), (31, 11), (62, 23)]   # (knot i, n node j)
 def _exact_kink(n):
     """x_c(n) = a1 at qmax_c = (n+1)^(1/n) - 1 from the exact orbit (just below qmax_c)."""
     qc = (n + 1.0) ** (1.0 / n) - 1.0
-    return np.asarray(jax.vmap(powerlaw_orbit)(jnp.asarray(qc * (1 - 1e-12)), jnp.asarray(n))[1])
+    return np.asarray(jax.jit(jax.vmap(powerlaw_orbit))(jnp.asarray(qc * (1 - 1e-12)), jnp.asarray(n))[1])
 
 
 @pytest.fixture(scope="module")

@@ -143,7 +143,7 @@ def test_table_stiffness_against_solver_differences():
     pts = np.concatenate([ds - h, ds + h])
     f = gt.load_approach(pts, n_rings=200)
     ref = (f[4:] - f[:4]) / (2 * h)
-    got = np.asarray(jax.vmap(jax.grad(lambda d: gw.reduced_force(d)))(jnp.asarray(ds)))
+    got = np.asarray(jax.jit(jax.vmap(jax.grad(lambda d: gw.reduced_force(d))))(jnp.asarray(ds)))
     np.testing.assert_allclose(got, ref, rtol=1e-5)
 
 
@@ -305,9 +305,12 @@ def test_finite_gradients_over_the_prior_region():
 
 @pytest.mark.slow
 def test_table_rebuild_is_reproducible():
+    # to rounding, not bit for bit: XLA's CPU code differs between machines (vector width,
+    # fused multiply-adds): a rebuild here moved 60 of the 401 stored knots by
+    # up to 4e-16 relative; the table's stated error in ln f is 1.3e-9
     table = gw.build_table()
     stored = gw.load_table()
-    np.testing.assert_array_equal(table["y_knots"], stored["y_knots"])
+    np.testing.assert_allclose(table["y_knots"], stored["y_knots"], rtol=1e-13, atol=0)
 
 
 def test_in_the_default_comparison_with_finite_backbone_gradients_over_the_prior():

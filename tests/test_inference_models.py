@@ -86,8 +86,8 @@ def test_prior_predictive_and_finite_gradients(spec):
     latents = {k: prior[k][:8] for k in prior if k not in
                ("f0_obs", "shift_obs", "q_obs", "delta0", "f0_pred", "shift_pred", "q_pred",
                 "e_star")}
-    u = jax.vmap(lambda p: unconstrain_fn(model, (data,), {}, p))(latents)
-    g = jax.vmap(jax.grad(lambda p: potential_energy(model, (data,), {}, p)))(u)
+    u = jax.jit(jax.vmap(lambda p: unconstrain_fn(model, (data,), {}, p)))(latents)
+    g = jax.jit(jax.vmap(jax.grad(lambda p: potential_energy(model, (data,), {}, p))))(u)
     for k, v in g.items():
         assert np.all(np.isfinite(np.asarray(v))), k
 

@@ -58,7 +58,7 @@ def test_gradients_finite_everywhere_nuts_goes():
         return jkr_table.shift_first_order_fast(xx, jkr_table.load_ratio(0.02, gamma=g,
                                                                           radius=R))
 
-    gx, gg = jax.vmap(jax.vmap(jax.grad(s, argnums=(0, 1)), (0, None)), (None, 0))(x, gamma)
+    gx, gg = jax.jit(jax.vmap(jax.vmap(jax.grad(s, argnums=(0, 1)), (0, None)), (None, 0)))(x, gamma)
     assert np.all(np.isfinite(gx)) and np.all(np.isfinite(gg))
     # d/d gamma against a central difference at an interior point
     h = 1e-6

@@ -140,7 +140,7 @@ def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Pa
               + (" QUICK RUN: numbers not meaningful." if quick else ""))
     inputs = model_inputs(load_data(DEFAULTS))
     if quick:
-        batches, n_freq, budget = (1, 4), 4, 30.0
+        batches, n_freq, budget = (2,), 4, 30.0   # one compiled shape, batched
         names, (chains, warm, draws) = laws or ["hertz"], (2, 30, 30)
     else:
         batches, n_freq, budget = (1, 32, 256, 2048), 26, 120.0
