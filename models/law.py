@@ -113,9 +113,12 @@ class Param:
 
     ``display`` = (unit, scale): how tables show it (e.g. ('GPa', 1e9)). ``scene_key``:
     the scene quantity that gives its nominal value (``beadrod shift`` uses it when the
-    parameter is not given; otherwise the prior median). ``domain``: [lo, hi], the values
-    for which the law's functions are defined (outside them they return NaN, and
-    ``beadrod shift`` refuses them); None: every value its prior's kind allows.
+    parameter is not given; otherwise the prior median). ``domain``: [lo, hi] (``(lo, hi]``
+    with ``open_low``), the values for which the law's functions are defined (outside
+    them they return NaN); None: every value its prior's kind allows. ``bounds``: the
+    :data:`models.scenes.BOUNDS` key of the physical range of its quantity. ``what``:
+    what it is, in messages. The commands refuse a value outside either
+    (:meth:`problem`).
     """
 
     name: str
@@ -126,6 +129,43 @@ class Param:
     display: tuple[str, float] | None = None
     scene_key: str | None = None
     domain: tuple[float, float] | None = None
+    open_low: bool = False
+    bounds: str | None = None
+    what: str = ""
+
+    def domain_text(self) -> str | None:
+        """The domain as an interval, e.g. '(1, 3]' (None: no domain)."""
+        if self.domain is None:
+            return None
+        lo, hi = self.domain
+        return f"{'(' if self.open_low else '['}{lo:g}, {hi:g}]"
+
+    def bounds_range(self) -> tuple[float, float, str] | None:
+        """(low, high, why) of the physical bounds of its quantity (None: none)."""
+        if self.bounds is None:
+            return None
+        from .scenes import BOUNDS
+
+        return BOUNDS[self.bounds]
+
+    def problem(self, value: float) -> str | None:
+        """Why ``value`` cannot be this parameter's value (not finite, outside its domain
+        or its quantity's physical bounds), or None."""
+        v = float(value)
+        what = self.what or self.name
+        unit = "" if self.unit in ("-", "?") else f" {self.unit}"
+        if not math.isfinite(v):
+            return f"{self.name} = {value}: must be a finite number"
+        if self.domain is not None:
+            lo, hi = self.domain
+            if not ((lo < v if self.open_low else lo <= v) and v <= hi):
+                return (f"{self.name} = {v:g}: {what} is defined for {self.name} in "
+                        f"{self.domain_text()}{unit} (its domain, `beadrod laws`)")
+        rng = self.bounds_range()
+        if rng is not None and not rng[0] <= v <= rng[1]:
+            return (f"{self.name} = {v:g}: {what} must lie in [{rng[0]:g}, {rng[1]:g}]{unit} "
+                    f"({rng[2]})")
+        return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -328,7 +368,9 @@ class ContactLaw:
             "description": self.description,
             "params": [{"name": p.name, "unit": p.unit, "label": p.label,
                         "description": p.description, "prior": _prior_text(p),
-                        "domain": None if p.domain is None else list(p.domain)}
+                        "domain": None if p.domain is None else list(p.domain),
+                        "domain_open_low": p.open_low,
+                        "bounds": None if p.bounds is None else list(p.bounds_range()[:2])}
                        for p in self.params],
         }
 
@@ -348,7 +390,7 @@ YOUNG = Param(
     "austenitic/martensitic stainless and carbon steels span about 180-215 GPa (paper: "
     "190-210 GPa); the wider band leaves room for near-surface damage and grade "
     "uncertainty without admitting non-steels.",
-    display=("GPa", 1e9), scene_key="young")
+    display=("GPa", 1e9), scene_key="young", bounds="young_Pa", what="Young's modulus")
 """E, shared by every law whose force is set by the elastic modulus."""
 
 GAMMA = Param(
@@ -356,7 +398,7 @@ GAMMA = Param(
     "Surface energy of each surface (work of adhesion w = 2 gamma). Prior LogNormal("
     "median 0.7, sd of log 0.5) J/m^2: clean steel-steel surfaces are of order 1 J/m^2, "
     "contaminated ones (air, oxide) a few tenths; the paper uses 0.7.",
-    scene_key="surface_energy")
+    scene_key="surface_energy", bounds="surface_energy_J_m2", what="the surface energy")
 """gamma, shared by the adhesive laws."""
 
 __all__ += ["YOUNG", "GAMMA"]

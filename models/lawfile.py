@@ -109,8 +109,12 @@ def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
     def user_force(delta, **kw):
         return force(delta, **{k: kw[k] for k in keys})
 
-    law_params = tuple(Param(k, "?", k, pr, f"law-file parameter {k}") for k, pr in
-                       priors.items())
+    # a fitted E (the one scene quantity a file may fit) keeps the quantity's unit and
+    # physical bounds, so the commands check it as they check the built-in laws' E
+    law_params = tuple(Param(k, "Pa", k, pr, "law-file parameter young (Young's modulus)",
+                             bounds="young_Pa", what="Young's modulus") if k == "young" else
+                       Param(k, "?", k, pr, f"law-file parameter {k}")
+                       for k, pr in priors.items())
     law = ContactLaw(
         name=name, label=str(getattr(mod, "LABEL", name)),
         reference=str(getattr(mod, "REFERENCE", f"user law file {path.name}")),

@@ -70,7 +70,7 @@ def _law():
                 "contacts; a Lennard-Jones gap z0 = 0.4 nm gives lambda ~ 30 for the paper's "
                 "bead. The law is defined on the prior's range only (its static state is "
                 "tabulated there, models.maugis_dugdale_static; NaN outside).",
-                domain=static.LAM_RANGE)
+                domain=static.LAM_RANGE, what="the Maugis transition parameter")
 
     def ratio(kw):
         return static.load_ratio(kw["load"], radius=kw["radius"], gamma=kw["gamma"],

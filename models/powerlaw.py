@@ -96,7 +96,9 @@ def _law():
     n = Param("n", "-", r"$n$", Prior("uniform", 1.0, 3.0),
               "Load-overlap exponent, F = C delta^n. Prior Uniform(1, 3): n = (1 + H)/H for "
               "Hurst exponent 0.5 <= H < inf; n = 3/2 is Hertz, n = 2 a soft oxide shell; "
-              "n < 1 would soften under compression, n > 3 is beyond any self-affine surface.")
+              "n < 1 would soften under compression, n > 3 is beyond any self-affine surface. "
+              "The law is defined for 1 < n <= 3 (n = 1 is a linear spring: no shift).",
+              domain=(1.0, 3.0), open_low=True, what="the power-law exponent")
     ref = Param("delta0_ref_log", "log m", r"$\ln\delta_{0,\mathrm{ref}}$",
                 Prior("normal", math.log(55e-9), 1.0),
                 "Natural log of the static overlap under the weight at the nominal mount "

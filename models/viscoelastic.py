@@ -230,7 +230,8 @@ def _law(split: bool):
                      "1e8) Pa s: unknown over decades; the paper's shift fit gives 1.05e6, its "
                      "measured Q = 20-100 implies 5e4-3e5; the interval brackets both by more "
                      "than two decades either way (scale-invariant).",
-                     display=("MPa s", 1e6), scene_key="viscosity")
+                     display=("MPa s", 1e6), scene_key="viscosity", bounds="viscosity_Pa_s",
+                     what="the viscosity")
 
     if split:
         params = (YOUNG, eta("eta_shift", "that enters the shift (only under the paper's "

@@ -536,3 +536,41 @@ def test_code_digest_follows_the_code(tmp_path):
     law_file.write_text("NAME = 'b'\n")
     code_digest.cache_clear()  # a new process: the digest is cached per run
     assert code_digest((str(law_file),)) != d0
+
+
+STIFF_LAW = '''
+import jax.numpy as jnp
+import numpyro.distributions as dist
+NAME = "stiff_power"
+PRIORS = {"young": dist.Uniform(150e9, 250e9), "n": dist.Uniform(1.0, 6.0)}
+def force(delta, *, young, poisson, radius, n):
+    t = delta > 0
+    d = jnp.where(t, delta, 1.0)
+    hertz = 4 / 3 * young / (2 * (1 - poisson**2)) * jnp.sqrt(radius) * d**1.5
+    return jnp.where(t, hertz * (d / 5e-8) ** (n - 1.5), 0.0)
+'''
+
+
+def test_a_value_is_checked_by_the_laws_own_parameter(tmp_path):
+    """What a parameter's values may be is the law's parameter's (models.law.Param: its
+    domain and its quantity's physical bounds), not a list by name: a file law's own
+    exponent n is not held to the power law's (1, 3], its E is held to E's bounds."""
+    from inference.likelihood import scene_quantities
+    from models.lawfile import load_law_file
+    from models.registry import get_law
+    from models.scenes import builtin_scene
+    from workflows.cmd_shift import check_param
+
+    power = get_law("powerlaw")
+    with pytest.raises(ValueError, match=r"n = 1: the power-law exponent is defined for n "
+                                         r"in \(1, 3\]"):
+        check_param(power, "n", 1.0)
+    assert check_param(power, "n", 3.0) == 3.0
+    f = tmp_path / "stiff_power.py"
+    f.write_text(STIFF_LAW)
+    law = load_law_file(f, scene_quantities(builtin_scene("paper")))
+    assert check_param(law, "n", 4.5) == 4.5
+    with pytest.raises(ValueError, match="Young's modulus must lie in"):
+        check_param(law, "young", -1.0)
+    with pytest.raises(ValueError, match="finite"):
+        check_param(law, "n", float("nan"))

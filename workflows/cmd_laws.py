@@ -30,7 +30,11 @@ def _text(rows: list[dict]) -> str:
             out.append(f"  {r['description']}")
         for p in r["params"]:
             dom = "" if p["domain"] is None else (
-                f", defined on [{p['domain'][0]:g}, {p['domain'][1]:g}]")
+                f", defined on {'(' if p['domain_open_low'] else '['}{p['domain'][0]:g}, "
+                f"{p['domain'][1]:g}]")
+            if p["bounds"] is not None:
+                dom += (f", physically in [{p['bounds'][0]:g}, {p['bounds'][1]:g}] "
+                        f"{p['unit']}")
             out.append(f"  - {p['name']} [{p['unit']}]: prior {p['prior']}{dom}")
     return "\n".join(out)
 

@@ -150,22 +150,23 @@ def _speeds(mat):
 
 
 def check_given(given: dict[str, float]) -> dict[str, float]:
-    """``given`` if every key is a parameter of some registered law, each value inside its
-    domain (workflows.cmd_shift.check_param, and check_in_domain for every law that has
-    the parameter); ValueError otherwise."""
+    """``given`` (as floats) if every key is a parameter of some registered law and each
+    value is a value of that parameter for every law that has it
+    (workflows.cmd_shift.check_param); ValueError otherwise."""
     from models.registry import laws
 
-    from .cmd_shift import check_in_domain, check_param
+    from .cmd_shift import check_param
 
     known = {p for law in laws() for p in law.param_names}
     unknown = sorted(set(given) - known)
     if unknown:
         raise ValueError(f"--param {', '.join(unknown)}: no registered law has such a "
                          f"parameter; the laws' parameters: {sorted(known)}")
+    out = {k: float(v) for k, v in given.items()}
     for law in laws():
         for k, v in given.items():
-            check_in_domain(law, k, v)
-    return {k: check_param(k, v) for k, v in given.items()}
+            check_param(law, k, v)
+    return out
 
 
 def scene_quantities(scene, given: dict[str, float] | None = None) -> dict:

@@ -8,10 +8,12 @@ reason (exit status 2):
   tangent stiffness then no longer describes the motion, and far beyond it (x = 10 it
   predicts a stiffening, where the exact backbone softens) it means nothing. The laws'
   fast backbone paths are tabulated on the same range (models.backbone_table).
-* the power-law exponent must satisfy 1 < n <= 3 (the range of the law: n = 1 is a
-  linear spring, no shift; past 3 no rough-contact model, and no table, applies);
-* law parameters must be finite and physical: Young's modulus, viscosities and surface
-  energies within the physical bounds of a scene (models.scenes.BOUNDS).
+* every law parameter must be finite and a value of that law's parameter
+  (models.law.Param.problem): inside its domain (the power-law exponent 1 < n <= 3: n = 1
+  is a linear spring, no shift, and past 3 no rough-contact model, and no table, applies;
+  Maugis-Dugdale's lam in [0.1, 100], where its state is tabulated) and inside the
+  physical bounds of its quantity (Young's modulus, viscosities and surface energies:
+  models.scenes.BOUNDS). The law's parameter says which; nothing here lists them.
 
 The parameter checks are small functions (:func:`check_x`, :func:`check_param`) so that
 any way of passing a parameter goes through the same check.
@@ -29,9 +31,8 @@ from models.rungs import RUNGS
 
 from . import lawfiles
 
-__all__ = ["register", "shift_table", "check_x", "check_param", "check_in_domain",
-           "check_method", "X_MAX",
-           "METHODS", "PARAM_DOMAINS", "scene_keywords", "nominal_theta", "parse_params"]
+__all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
+           "METHODS", "scene_keywords", "nominal_theta", "parse_params"]
 
 X_MAX = 2.0
 """Largest x = delta_a/delta0 computed (models.backbone_table.X_MAX: the tables end there)."""
@@ -40,17 +41,6 @@ X_MAX = 2.0
 # computes those it lists in its ``rungs`` (check_method)
 # as everywhere else
 METHODS = tuple(RUNGS)
-
-# law parameter -> (what it is, unit, (low, high, low excluded) or the models.scenes.BOUNDS
-# key that gives the physical range)
-PARAM_DOMAINS: dict[str, tuple[str, str, tuple[float, float, bool] | str]] = {
-    "n": ("the power-law exponent", "-", (1.0, 3.0, True)),
-    "young": ("Young's modulus", "Pa", "young_Pa"),
-    "eta": ("the viscosity", "Pa s", "viscosity_Pa_s"),
-    "eta_shift": ("the viscosity of the shift", "Pa s", "viscosity_Pa_s"),
-    "eta_q": ("the viscosity of Q", "Pa s", "viscosity_Pa_s"),
-    "gamma": ("the surface energy", "J/m^2", "surface_energy_J_m2"),
-}
 
 # the former law name of the paper's Eq. 25, kept as a spelling of (viscoelastic, paper_eq25)
 _ALIASES = {"viscoelastic_paper_eq25": ("viscoelastic", "paper_eq25")}
@@ -80,37 +70,17 @@ def check_x(xs: Sequence[float]) -> list[float]:
     return out
 
 
-def check_param(name: str, value: float) -> float:
-    """``value`` of law parameter ``name`` as a float inside its physical domain."""
+def check_param(law: Any, name: str, value: float) -> float:
+    """``value`` as a float if it is finite and, for a parameter of ``law``, inside its
+    domain and its quantity's physical bounds (models.law.Param.problem: the law's
+    parameter says what its values are, not a list here); ValueError otherwise."""
     v = float(value)
     if not math.isfinite(v):
         raise ValueError(f"{name} = {value}: must be a finite number")
-    if name not in PARAM_DOMAINS:
-        return v
-    what, unit, rng = PARAM_DOMAINS[name]
-    if isinstance(rng, str):
-        from models.scenes import BOUNDS
-
-        lo, hi, why = BOUNDS[rng]
-        open_lo = False
-    else:
-        (lo, hi, open_lo), why = rng, ""
-    if not ((lo < v if open_lo else lo <= v) and v <= hi):
-        unit = "" if unit == "-" else f" {unit}"
-        raise ValueError(f"{name} = {_fmt(v)}: {what} must lie in {'(' if open_lo else '['}"
-                         f"{_fmt(lo)}, {_fmt(hi)}]{unit}" + (f" ({why})" if why else ""))
+    problem = law.param(name).problem(v) if name in law.param_names else None
+    if problem is not None:
+        raise ValueError(problem if law.source == "built-in" else f"law '{law.name}': {problem}")
     return v
-
-
-def check_in_domain(law: Any, name: str, value: float) -> float:
-    """``value`` if it lies in the domain of ``law``'s parameter ``name`` (its ``domain``,
-    where it has one: the law's functions are NaN outside it); ValueError otherwise."""
-    dom = law.param(name).domain if name in law.param_names else None
-    if dom is not None and not dom[0] <= value <= dom[1]:
-        raise ValueError(f"{name} = {_fmt(value)}: law '{law.name}' is defined for {name} in "
-                         f"[{_fmt(dom[0])}, {_fmt(dom[1])}] (its parameter's domain, "
-                         "`beadrod laws`)")
-    return value
 
 
 def check_method(law: Any, method: str) -> str:
@@ -144,7 +114,7 @@ def nominal_theta(law: Any, sc: dict[str, float], given: dict[str, float] | None
     from models.nominal import nominal_parameters
 
     theta, source = nominal_parameters(law, sc, given)
-    return {k: check_param(k, v) for k, v in theta.items()}, source
+    return {k: check_param(law, k, v) for k, v in theta.items()}, source
 
 
 def parse_params(items: Sequence[str] | None) -> dict[str, float]:
@@ -186,11 +156,11 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     if law in _ALIASES:
         law, method = _ALIASES[law]
     xs = check_x(x)
-    given = {k: check_param(k, v) for k, v in (params or {}).items()}
+    contact = get_law(law)
+    given = dict(params or {})
     for k, v in (("n", n), ("young", young), ("eta", eta)):
         if v is not None:
-            given[k] = check_param(k, v)
-    contact = get_law(law)
+            given[k] = v
     if "eta" in given and "eta" not in contact.param_names:
         for k in ("eta_shift", "eta_q"):  # --eta sets both viscosities of the split law
             if k in contact.param_names:
@@ -200,8 +170,7 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     if unknown:
         raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
                          f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
-    for k, v in given.items():
-        check_in_domain(contact, k, v)
+    given = {k: check_param(contact, k, v) for k, v in given.items()}
     rung = check_method(contact, method)
     sc = scene_keywords(scene)
     sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
