@@ -29,9 +29,11 @@ def pytest_configure(config):
     # XLA's CPU backend without LLVM's optimisation passes for the default suite: it runs
     # tiny fits and many small programs, so compiling is most of its time (on the 2-core
     # machine the suite took 15:39 with them, 11:44 without; the numbers are the same
-    # code's to rounding). The slow checks run long chains and keep them. Set before any
-    # backend starts (jax only reads it then), in the controlling process: xdist workers
-    # and the comparison's worker processes inherit it. A caller's own setting is kept.
+    # code's to rounding). What it cannot see: rounding only optimised code has (fused
+    # multiply-adds); the slow checks keep the optimisations, as every command and
+    # benchmark does. Set before any backend starts (jax reads it then), in the
+    # controlling process: xdist workers and the comparison's worker processes inherit
+    # it. A caller's own setting is kept.
     opt = "--xla_backend_optimization_level"
     if "not slow" in (config.option.markexpr or "") and opt not in os.environ.get(
             "XLA_FLAGS", ""):
