@@ -381,7 +381,14 @@ def _prior_text(p: Param) -> str:
             unit, scale = p.display
             return f"{p.prior.describe(scale)} {unit}"
         return p.prior.describe() + ("" if p.unit in ("-", "?") else f" {p.unit}")
-    return repr(p.prior)
+    # a law file's numpyro distribution: its class and scalar arguments, in SI units (its
+    # repr is an object address)
+    args = []
+    for k in getattr(p.prior, "arg_constraints", {}):
+        v = np.asarray(getattr(p.prior, k, np.nan))
+        args.append(f"{k}={float(v):g}" if v.size == 1 else f"{k}=<{v.size} values>")
+    unit = "" if p.unit in ("-", "?") else f" {p.unit}"
+    return f"{type(p.prior).__name__}({', '.join(args)}){unit}"
 
 
 YOUNG = Param(

@@ -22,6 +22,7 @@ naming the file and what is wrong.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import inspect
 import math
@@ -34,7 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .autotable import attach_fast_backbone
-from .law import SCENE_KEYS, ContactLaw, Param, Prior, prior_median
+from .law import SCENE_KEYS, YOUNG, ContactLaw, Param, Prior, prior_median
 
 __all__ = ["LawFileError", "load_law_file"]
 
@@ -100,7 +101,7 @@ def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
             raise _fail(path, f"force's argument {k!r} has no prior in PRIORS and is not a "
                               f"scene quantity ({', '.join(SCENE_KEYS)})")
     for k, pr in priors.items():
-        if k in SCENE_KEYS and k != "young":
+        if k in SCENE_KEYS and k != YOUNG.name:
             raise _fail(path, f"PRIORS[{k!r}] shadows a scene quantity: rename it")
         if k not in keys:
             raise _fail(path, f"PRIORS[{k!r}] is not an argument of force")
@@ -109,12 +110,12 @@ def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
     def user_force(delta, **kw):
         return force(delta, **{k: kw[k] for k in keys})
 
-    # a fitted E (the one scene quantity a file may fit) keeps the quantity's unit and
-    # physical bounds, so the commands check it as they check the built-in laws' E
-    law_params = tuple(Param(k, "Pa", k, pr, "law-file parameter young (Young's modulus)",
-                             bounds="young_Pa", what="Young's modulus") if k == "young" else
-                       Param(k, "?", k, pr, f"law-file parameter {k}")
-                       for k, pr in priors.items())
+    # a fitted E (the one scene quantity a file may fit) is the built-in laws' E with the
+    # file's prior: its unit, label, scene value and physical bounds come from YOUNG
+    law_params = tuple(
+        dataclasses.replace(YOUNG, prior=pr, description="law-file parameter: Young's "
+                            "modulus, with the file's prior") if k == YOUNG.name else
+        Param(k, "?", k, pr, f"law-file parameter {k}") for k, pr in priors.items())
     law = ContactLaw(
         name=name, label=str(getattr(mod, "LABEL", name)),
         reference=str(getattr(mod, "REFERENCE", f"user law file {path.name}")),

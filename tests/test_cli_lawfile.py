@@ -23,6 +23,7 @@ def test_laws_lists_the_file(capsys):
     row = next(r for r in rows if r["name"] == "hertz_scratch")
     assert row["source"].endswith("hertz_scratch.py")
     assert [p["name"] for p in row["params"]] == ["young"]
+    assert row["params"][0]["prior"] == "Uniform(low=1.5e+11, high=2.5e+11) Pa"
     # every rung of the ladder (models.generic, models.generic_dynamics serve them)
     assert {"series", "first_order", "backbone", "harmonic_balance",
             "time_integration"} <= set(row["rungs"])

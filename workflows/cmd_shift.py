@@ -75,11 +75,12 @@ def check_param(law: Any, name: str, value: float) -> float:
     domain and its quantity's physical bounds (models.law.Param.problem: the law's
     parameter says what its values are, not a list here); ValueError otherwise."""
     v = float(value)
-    if not math.isfinite(v):
+    if name in law.param_names:
+        problem = law.param(name).problem(v)
+        if problem is not None:
+            raise ValueError(f"law '{law.name}': {problem}")
+    elif not math.isfinite(v):
         raise ValueError(f"{name} = {value}: must be a finite number")
-    problem = law.param(name).problem(v) if name in law.param_names else None
-    if problem is not None:
-        raise ValueError(problem if law.source == "built-in" else f"law '{law.name}': {problem}")
     return v
 
 
