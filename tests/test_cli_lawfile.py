@@ -48,7 +48,7 @@ def test_a_broken_law_file_is_one_line_naming_the_file(tmp_path, capsys):
 
 def test_compare_fits_the_file_law(tmp_path):
     """The file's law goes through the comparison (fit, evidence, tables, report) at the
-    default rung (its backbone tabulated when the file is loaded); its figures and the
+    default rung (its backbone tabulated on first use); its figures and the
     comparison beside the built-in Hertz at full settings are the slow test's below.
     (At the first-order rung, the generic quadrature in every step, this took 2 min of
     the default suite.)"""
