@@ -403,7 +403,14 @@ def tiny_fit(tmp_path_factory):
     return ds, inputs, runs, result, fitted_specs(runs, cfg), tmp_path_factory.mktemp("figs")
 
 
-def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit):
+def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, caplog):
+    """Every compare figure is written (PNG and PDF); written by the writer processes
+    (workflows.figure_pool) every one pickles (none falls back to this process) and comes
+    out pixel for pixel the same."""
+    import logging
+
+    import matplotlib.image as mpimg
+
     from workflows.compare_figures import make_figures
 
     ds, inputs, runs, result, _, out = tiny_fit
@@ -415,6 +422,13 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit):
     for e in entries:
         _check_written([out / e["path"], out / e["path"].replace(".png", ".pdf")],
                        out / e["path"][:-4])
+    with caplog.at_level(logging.DEBUG, logger="beadrod"):
+        pooled = make_figures(runs, inputs, ds, result, tmp_path, processes=2)
+    assert "does not pickle" not in caplog.text
+    assert [e["path"] for e in pooled] == [e["path"] for e in entries]
+    for e in entries:
+        np.testing.assert_array_equal(mpimg.imread(out / e["path"]),
+                                      mpimg.imread(tmp_path / e["path"]), err_msg=e["path"])
 
 
 def test_tiny_fit_panels_follow_the_law(tiny_fit):

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from . import figure_data, plots, styles
+from .figure_pool import FigureWriter
 from .plots_data import Curve
 
 __all__ = ["make_figures", "theory_curves", "figure_laws", "fitted_specs", "exponent_law",
@@ -336,20 +337,24 @@ def _diagnostic_figures(save, runs, result) -> None:
 
 
 def make_figures(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, result: dict[str, Any],
-                 out: Path) -> list[dict[str, Any]]:
-    """Write every figure into ``out/figures`` and return their report entries."""
+                 out: Path, processes: int = 1) -> list[dict[str, Any]]:
+    """Write every figure into ``out/figures`` and return their report entries; with
+    ``processes`` > 1 the files are written by that many worker processes while the next
+    figures are drawn (:mod:`workflows.figure_pool`: the same files)."""
     fig_dir = out / "figures"
     entries: list[dict[str, Any]] = []
+    with FigureWriter(processes) as writer:
 
-    def save(fig, name: str, caption: str, section: str) -> None:
-        plots.save_figure(fig, fig_dir / name)
-        entries.append({"path": f"figures/{name}.png", "caption": caption, "section": section})
+        def save(fig, name: str, caption: str, section: str) -> None:
+            writer.save(fig, fig_dir / name)
+            entries.append({"path": f"figures/{name}.png", "caption": caption,
+                            "section": section})
 
-    specs = fitted_specs(runs, result.get("config", {}))
-    _theory_figures(save, runs, specs, inputs, ds.scene)
-    _data_figures(save, ds, {getattr(spec, "law", None) for spec in specs.values()})
-    _shift_figures(save, runs, specs, inputs, ds, result.get("preferred"))
-    _tension_figures(save, result, out)
-    _evidence_figure(save, result)
-    _diagnostic_figures(save, runs, result)
+        specs = fitted_specs(runs, result.get("config", {}))
+        _theory_figures(save, runs, specs, inputs, ds.scene)
+        _data_figures(save, ds, {getattr(spec, "law", None) for spec in specs.values()})
+        _shift_figures(save, runs, specs, inputs, ds, result.get("preferred"))
+        _tension_figures(save, result, out)
+        _evidence_figure(save, result)
+        _diagnostic_figures(save, runs, result)
     return entries

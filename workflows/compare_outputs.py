@@ -234,10 +234,10 @@ def report_extras(runs: dict[str, Any], ds: Any) -> dict[str, Any]:
                                               ds.f0, ds.q_ref, idatas)}
 
 
-def figures(runs, inputs, ds, result, out: Path) -> list[dict[str, Any]]:
+def figures(runs, inputs, ds, result, out: Path, processes: int = 1) -> list[dict[str, Any]]:
     from .compare_figures import make_figures
 
-    return make_figures(runs, inputs, ds, result, out)
+    return make_figures(runs, inputs, ds, result, out, processes=processes)
 
 
 def write_outputs(result: dict[str, Any], out: Path) -> None:

@@ -198,7 +198,9 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
         result["figures"] = []
         if figures:
             begin(log, "figures", "figures")
-            result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out)
+            # the fits' worker count also writes the figures (workflows.figure_pool)
+            result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out,
+                                                        processes=workers)
             done(log, "figures", "figures done (%.0f s)", time.perf_counter() - t0)
         timings["figures_s"] = time.perf_counter() - t0
         timings["total_s"] = time.perf_counter() - t_start
