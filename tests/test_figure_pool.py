@@ -1,5 +1,6 @@
 """Figures written by worker processes (workflows.figure_pool) are the files one process
-writes; a figure that does not pickle is written anyway; a failed write names its figure."""
+writes; a figure that does not pickle is written anyway; a warning of a write reaches the
+parent; a failed write names its figure."""
 
 import matplotlib
 
@@ -27,7 +28,11 @@ def _figure(label: str = "Delta f/f0 [-]"):
     return fig
 
 
-def test_pool_writes_the_same_pixels_as_one_process(tmp_path):
+def test_pool_writes_the_same_pixels_as_one_process(tmp_path, monkeypatch):
+    from workflows import figure_pool
+
+    unpickled = []
+    monkeypatch.setattr(figure_pool.log, "debug", lambda *a: unpickled.append(a[1]))
     with FigureWriter(1) as w:
         w.save(_figure(), tmp_path / "one")
     odd = _figure()   # an artist holding a lambda does not pickle: written here instead
@@ -42,6 +47,7 @@ def test_pool_writes_the_same_pixels_as_one_process(tmp_path):
     for name in ("one", "pool", "pool2", "lambda"):
         assert (tmp_path / f"{name}.pdf").read_bytes()[:5] == b"%PDF-"
     assert mpimg.imread(tmp_path / "lambda.png").shape == a.shape
+    assert unpickled == ["lambda"], "only the figure holding a lambda is written here"
     assert not plt.get_fignums(), "every figure is closed after it is handed over"
 
 
@@ -50,3 +56,13 @@ def test_a_failed_write_names_the_figure(tmp_path):
     with pytest.raises(RuntimeError, match="figure broken: writing failed"):
         with FigureWriter(2) as w:
             w.save(_figure(), tmp_path / "not_a_folder" / "broken")
+
+
+def test_a_warning_raised_while_a_worker_writes_is_raised_here(tmp_path):
+    fig, axes = plt.subplots(3, 3, figsize=(0.6, 0.6), layout="constrained")
+    for ax in axes.flat:   # too small for its labels: the layout solve warns when drawn
+        ax.set_ylabel("a very long label [units]")
+    with pytest.warns(UserWarning, match="figure cramped: constrained_layout not applied"):
+        with FigureWriter(2) as w:
+            w.save(fig, tmp_path / "cramped")
+    assert (tmp_path / "cramped.png").exists()

@@ -403,14 +403,13 @@ def tiny_fit(tmp_path_factory):
     return ds, inputs, runs, result, fitted_specs(runs, cfg), tmp_path_factory.mktemp("figs")
 
 
-def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, caplog):
+def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkeypatch):
     """Every compare figure is written (PNG and PDF); written by the writer processes
     (workflows.figure_pool) every one pickles (none falls back to this process) and comes
     out pixel for pixel the same."""
-    import logging
-
     import matplotlib.image as mpimg
 
+    from workflows import figure_pool
     from workflows.compare_figures import make_figures
 
     ds, inputs, runs, result, _, out = tiny_fit
@@ -422,9 +421,10 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, caplog
     for e in entries:
         _check_written([out / e["path"], out / e["path"].replace(".png", ".pdf")],
                        out / e["path"][:-4])
-    with caplog.at_level(logging.DEBUG, logger="beadrod"):
-        pooled = make_figures(runs, inputs, ds, result, tmp_path, processes=2)
-    assert "does not pickle" not in caplog.text
+    unpickled = []
+    monkeypatch.setattr(figure_pool.log, "debug", lambda *a: unpickled.append(a))
+    pooled = make_figures(runs, inputs, ds, result, tmp_path, processes=2)
+    assert not unpickled, unpickled
     assert [e["path"] for e in pooled] == [e["path"] for e in entries]
     for e in entries:
         np.testing.assert_array_equal(mpimg.imread(out / e["path"]),

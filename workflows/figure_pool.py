@@ -12,7 +12,9 @@ The files are the same: the worker runs the same ``save_figure`` (atomic writes,
 layout solve) on an exact copy of the figure, under the parent's matplotlib rcParams
 (tests/test_figure_pool.py compares the PNGs pixel for pixel). A figure that does not
 pickle (an artist holding a lambda, say) is written here instead, as with one process.
-A failed write is raised when the writer is closed, naming the figure.
+A warning raised while a worker writes (matplotlib's "constrained_layout not applied",
+say) is raised again here, so it reaches the run's log as an in-process one would. A
+failed write is raised when the writer is closed, naming the figure.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import pickle
+import warnings
 from concurrent.futures import Future, ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -36,12 +39,16 @@ def _init(rc: dict[str, Any]) -> None:
     matplotlib.rcParams.update(rc)
 
 
-def _write(blob: bytes, path: str) -> list[str]:
+def _write(blob: bytes, path: str) -> list[tuple[type[Warning], str]]:
+    # the warnings the write raised, for the parent to raise again (a worker has no log)
     import matplotlib.pyplot as plt  # noqa: F401 (a figure's canvas needs pyplot's backend)
 
     from workflows.plots import save_figure
 
-    return [str(p) for p in save_figure(pickle.loads(blob), path)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        save_figure(pickle.loads(blob), path)
+    return [(w.category, str(w.message)) for w in caught]
 
 
 class FigureWriter:
@@ -87,8 +94,10 @@ class FigureWriter:
             for name, fut in self._pending:
                 if exc_info[0] is None:
                     try:
-                        fut.result()
+                        raised = fut.result()
                     except Exception as exc:
                         raise RuntimeError(f"figure {name}: writing failed: {exc}") from exc
+                    for category, message in raised:
+                        warnings.warn(f"figure {name}: {message}", category, stacklevel=2)
         finally:
             self._pool.shutdown(wait=True, cancel_futures=True)
