@@ -369,6 +369,20 @@ def test_posterior_filling_its_prior_is_flagged():
     assert "fills its prior [1, 3]" in w
 
 
+def test_a_broad_posterior_leaning_on_a_bound_is_not_piled_against_it():
+    """Maugis-Dugdale's lam on the embedded data: 90 % interval [0.525, 80.2] under a
+    LogUniform(0.1, 100) prior (whose own 90 % interval is [0.141, 70.8]) spans 73 % of
+    the prior's log range; near the upper bound only because it barely moved."""
+    law = _law("md", "MD", -1.0, 0.1, -1.0, params=[_param("lam", 20.0, 25.0, 0.525, 80.2)])
+    (w,) = statistical_warnings({"laws": [law]})
+    assert "spans 73% of its prior [0.1, 100] on a log scale" in w, w
+    assert "lean towards its bound 100" in w and "piled against" not in w, w
+    # narrow and at the bound: piled against it, as before
+    law = _law("md", "MD", -1.0, 0.1, -1.0, params=[_param("lam", 90.0, 5.0, 80.0, 99.9)])
+    (w,) = statistical_warnings({"laws": [law]})
+    assert "piled against its prior bound 100" in w, w
+
+
 # --------------------------------------------------------------------------------- truth
 def test_truth_from_the_embedded_world():
     t = world_truth(json.loads((ROOT / "data/paper_like/truth.json").read_text()))

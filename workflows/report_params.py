@@ -11,8 +11,9 @@ with its justification: a law parameter's from its :class:`models.law.Param` des
 a nuisance parameter's from the docstring of :mod:`inference.priors`. The checks
 (:func:`parameter_warnings`) are those a statistician would raise on reading the tables:
 a posterior piled against a hard prior bound (its 90 % interval ends within a tenth of
-its own width of the bound, so the bound, not the data, cuts it off), or filling its
-prior (the data do not constrain it); and a modulus outside the scene's expected range.
+its own width of the bound, so the bound, not the data, cuts it off), filling its prior
+(the data do not constrain it), or spanning most of its prior while leaning towards one
+bound (the data barely constrain it); and a modulus outside the scene's expected range.
 """
 
 from __future__ import annotations
@@ -29,11 +30,16 @@ from .report_tables import DASH, fmt_num, fmt_pm, is_failed, law_label, pm_decim
 
 __all__ = ["Param", "PARAMETERS", "GLOSSARY", "param_info", "display_stats", "prior_text",
            "prior_reasons", "priors_table", "glossary_table", "param_table",
-           "parameter_warnings", "truth_tables", "BOUND_FRACTION"]
+           "parameter_warnings", "truth_tables", "BOUND_FRACTION", "WIDE_FRACTION"]
 
 BOUND_FRACTION = 0.1
 """An interval end closer to a hard prior bound than this fraction of its width is piled
 against the bound."""
+WIDE_FRACTION = 0.5
+"""A 90 % interval wider than this fraction of its prior's range (on the prior's own
+scale, log for a log-uniform prior) is barely constrained by the data: near one bound it
+leans towards it, rather than being piled against it (a flat posterior's 90 % interval
+ends 0.056 of its width from each bound; a mild tilt moves one end away)."""
 
 
 @dataclass(frozen=True)
@@ -332,6 +338,14 @@ def parameter_warnings(law: Mapping, young_range: Sequence[float] | None) -> lis
             if near_lo and near_hi:
                 out.append(f"{desc}, fills its prior {bound_txt}: the data do not constrain "
                            "it, and the evidence depends on the prior's width.")
+            elif (near_lo or near_hi) and width > WIDE_FRACTION * (f(hi_b) - f(lo_b)):
+                which = _shown(name, lo_b if near_lo else hi_b)
+                share = width / (f(hi_b) - f(lo_b))
+                scale = " on a log scale" if log else ""
+                out.append(f"{desc}, spans {share:.0%} of its prior {bound_txt}{scale}: the "
+                           f"data barely constrain it and lean towards its bound {_g(which)}"
+                           f"{unit}, which cuts the posterior off; the evidence depends on "
+                           "the prior's width.")
             elif near_lo or near_hi:
                 which = _shown(name, lo_b if near_lo else hi_b)
                 out.append(f"{desc}, is piled against its prior bound {_g(which)}{unit}: "
