@@ -369,7 +369,7 @@ class ContactLaw:
             "params": [{"name": p.name, "unit": p.unit, "label": p.label,
                         "description": p.description, "prior": _prior_text(p),
                         "domain": None if p.domain is None else list(p.domain),
-                        "domain_open_low": p.open_low,
+                        "domain_open_low": p.open_low, "domain_text": p.domain_text(),
                         "bounds": None if p.bounds is None else list(p.bounds_range()[:2])}
                        for p in self.params],
         }

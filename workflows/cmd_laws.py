@@ -29,9 +29,7 @@ def _text(rows: list[dict]) -> str:
         if r["description"]:
             out.append(f"  {r['description']}")
         for p in r["params"]:
-            dom = "" if p["domain"] is None else (
-                f", defined on {'(' if p['domain_open_low'] else '['}{p['domain'][0]:g}, "
-                f"{p['domain'][1]:g}]")
+            dom = "" if p["domain_text"] is None else f", defined on {p['domain_text']}"
             if p["bounds"] is not None:
                 dom += (f", physically in [{p['bounds'][0]:g}, {p['bounds'][1]:g}] "
                         f"{p['unit']}")

@@ -41,9 +41,7 @@ def _init(rc: dict[str, Any]) -> None:
 
 def _write(blob: bytes, path: str) -> list[tuple[type[Warning], str]]:
     # the warnings the write raised, for the parent to raise again (a worker has no log)
-    import matplotlib.pyplot as plt  # noqa: F401 (a figure's canvas needs pyplot's backend)
-
-    from workflows.plots import save_figure
+    from workflows.plots import save_figure  # Agg and pyplot, as in the parent
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

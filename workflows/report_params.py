@@ -334,13 +334,13 @@ def parameter_warnings(law: Mapping, young_range: Sequence[float] | None) -> lis
             width = f(q95) - f(q05)
             near_lo = f(q05) - f(lo_b) < BOUND_FRACTION * width
             near_hi = f(hi_b) - f(q95) < BOUND_FRACTION * width
+            share = width / (f(hi_b) - f(lo_b))   # of the prior's range, on its scale
             bound_txt = f"[{_g(_shown(name, lo_b))}, {_g(_shown(name, hi_b))}]{unit}"
             if near_lo and near_hi:
                 out.append(f"{desc}, fills its prior {bound_txt}: the data do not constrain "
                            "it, and the evidence depends on the prior's width.")
-            elif (near_lo or near_hi) and width > WIDE_FRACTION * (f(hi_b) - f(lo_b)):
+            elif (near_lo or near_hi) and share > WIDE_FRACTION:
                 which = _shown(name, lo_b if near_lo else hi_b)
-                share = width / (f(hi_b) - f(lo_b))
                 scale = " on a log scale" if log else ""
                 out.append(f"{desc}, spans {share:.0%} of its prior {bound_txt}{scale}: the "
                            f"data barely constrain it and lean towards its bound {_g(which)}"
