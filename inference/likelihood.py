@@ -16,6 +16,8 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
+from models.registry import get_law, law_names
+
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
            "design_inputs", "simulate", "scene_quantities", "sweep_layout", "SWEEP_LAYOUT_KEYS",
            "OBSERVED_SITES", "OBSERVED_DATA_KEYS"]
@@ -186,8 +188,20 @@ def simulate(model: Any, design: dict[str, Any], truth: dict[str, Any],
     import jax
     from numpyro import handlers
 
+    spec = getattr(model, "spec", None)
+    if spec is not None and spec.law in law_names():
+        # a parameter sampled scaled (models.law.ContactLaw.sampler_scales) is conditioned
+        # at its sample site
+        truth = get_law(spec.law).sampler_values(truth)
     cond = handlers.condition(model, data={k: jnp.asarray(v) for k, v in truth.items()})
     tr = handlers.trace(handlers.seed(cond, jax.random.PRNGKey(seed))).get_trace(design)
+    # a value for a site that is not sampled (a deterministic, a misspelling) would be
+    # silently ignored: refuse it
+    ignored = sorted(k for k in truth if tr.get(k, {}).get("type") != "sample")
+    if ignored:
+        raise ValueError(f"simulate: {ignored} are not sample sites of the model; its "
+                         "sample sites are "
+                         f"{sorted(k for k, s in tr.items() if s['type'] == 'sample')}")
     out = dict(design)
     out.pop("n_protocols", None)
     out["f0"] = tr["f0_obs"]["value"]

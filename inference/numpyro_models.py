@@ -79,9 +79,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import numpyro
+import numpyro.distributions as dist
 
 from models import hertz
-from models.law import RungUnavailable
+from models.law import RungUnavailable, sampler_site
 from models.registry import FIT_RUNGS, get_law, law_names
 
 from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
@@ -199,7 +200,19 @@ def paper_spec(law: str, **kw: Any) -> ModelSpec:
 
 
 def _theta(law, spec: ModelSpec) -> dict[str, Any]:
-    return {p.name: numpyro.sample(p.name, law_prior(p, spec.overrides)) for p in law.params}
+    # the parameters without a sampler scale first: a scale is a function of them
+    theta = {p.name: numpyro.sample(p.name, law_prior(p, spec.overrides))
+             for p in law.params if p.name not in law.sampler_scales}
+    for p in law.params:
+        scale = law.sampler_scales.get(p.name)
+        if scale is not None:
+            # p s ~ the law's prior of p scaled by s (a change of variables: p keeps its
+            # prior); the sampler's coordinate is that of p s (models.law.ContactLaw)
+            s = scale(**{k: theta[k] for k in theta})
+            scaled = numpyro.sample(sampler_site(p.name), dist.TransformedDistribution(
+                law_prior(p, spec.overrides), dist.transforms.AffineTransform(0.0, s)))
+            theta[p.name] = numpyro.deterministic(p.name, scaled / s)
+    return {p.name: theta[p.name] for p in law.params}
 
 
 def _law_model(spec: ModelSpec, data: dict) -> None:

@@ -26,6 +26,8 @@ import numpy as np
 import numpyro
 from numpyro.infer import MCMC, NUTS, init_to_median
 
+from models.law import sampler_site
+
 from .draws import fit_draws, observed_data, sample_stats
 from .evidence import latent_site_names
 from .likelihood import without_observations
@@ -109,7 +111,7 @@ def describe(idata: az.InferenceData) -> az.InferenceData:
         ds = idata[group]
         table = SAMPLE_STATS if group == "sample_stats" else VARIABLES
         for name in ds.data_vars:
-            info = table.get(str(name))
+            info = table.get(str(name)) or _sampler_info(str(name), table)
             if info is None:
                 continue
             if group == "log_likelihood":
@@ -120,6 +122,15 @@ def describe(idata: az.InferenceData) -> az.InferenceData:
                 if info.units:
                     ds[name].attrs["units"] = info.units
     return idata
+
+
+def _sampler_info(name: str, table: dict) -> Any:
+    # the sample site of a parameter with a sampler scale (models.law.sampler_site)
+    base = next((k for k in table if sampler_site(k) == name), None)
+    if base is None:
+        return None
+    return type(table[base])("", f"{base} times its law's sampler scale: the coordinate "
+                                 f"NUTS moves in ({table[base].description})")
 
 
 def nuts_kernel(model: Callable, *, target_accept: float = 0.9, max_tree_depth: int = 10,

@@ -44,7 +44,7 @@ import numpy as np
 from .rungs import LADDER
 
 __all__ = ["Prior", "Param", "ContactLaw", "SCENE_KEYS", "RungUnavailable", "effective_modulus",
-           "prior_median"]
+           "prior_median", "sampler_site"]
 
 SCENE_KEYS = ("radius", "young", "poisson", "e_star", "load", "mass", "gravity",
               "roughness_rms", "surface_energy")
@@ -200,6 +200,14 @@ class ContactLaw:
     ``in_default_comparison`` False keeps a law out of ``beadrod compare`` unless it is
     asked for by name (the law says why in its ``description``).
 
+    ``sampler_scales``: parameter name -> ``s(**others)`` > 0, a function of the law's
+    parameters that have no scale of their own. The sampler then moves in p s (its
+    unconstrained coordinate: ln(p s) for a positive p) instead of p, at site
+    :func:`sampler_site` (p stays a deterministic site of that name); p's prior is
+    unchanged (a change of variables). For a posterior ridge along which the data fix p s
+    and not p, which a dense mass matrix cannot follow where s varies over the other
+    parameters' range (the law says why in its module).
+
     ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
     behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
     ``tension_param`` names the loss parameter of the shared law, which the split law
@@ -229,6 +237,14 @@ class ContactLaw:
     in_default_comparison: bool = True
     tension_param: str | None = None
     cost: float = 1.0
+    sampler_scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        names = set(self.param_names)
+        for name in self.sampler_scales:
+            if name not in names:
+                raise ValueError(f"law '{self.name}': sampler_scales names {name!r}, which is "
+                                 f"not one of its parameters {sorted(names)}")
 
     # ------------------------------------------------------------------ parameters
     @property
@@ -251,6 +267,24 @@ class ContactLaw:
                 return p
         raise KeyError(f"law '{self.name}' has no parameter {name!r}; it has "
                        f"{list(self.param_names)}")
+
+    def sampler_values(self, values: Mapping[str, Any]) -> dict[str, Any]:
+        """``values`` with each parameter that has a sampler scale given at its sample site
+        instead (:func:`sampler_site`: the value times its scale, computed from the other
+        parameters in ``values``, which must be there); other keys pass through."""
+        out = {k: v for k, v in values.items() if k not in self.sampler_scales}
+        others = {k: v for k, v in values.items()
+                  if k in self.param_names and k not in self.sampler_scales}
+        for name, scale in self.sampler_scales.items():
+            if name not in values:
+                continue
+            missing = [p for p in self.param_names
+                       if p not in self.sampler_scales and p not in values]
+            if missing:
+                raise ValueError(f"law '{self.name}': {name} is sampled scaled by the other "
+                                 f"parameters; give {missing} with it")
+            out[sampler_site(name)] = values[name] * scale(**others)
+        return out
 
     def resolve(self, scene: Mapping[str, Any], theta: Mapping[str, Any]) -> dict[str, Any]:
         """Keywords for the law's functions: scene quantities overlaid by ``theta``.
@@ -370,9 +404,17 @@ class ContactLaw:
                         "description": p.description, "prior": _prior_text(p),
                         "domain": None if p.domain is None else list(p.domain),
                         "domain_open_low": p.open_low, "domain_text": p.domain_text(),
-                        "bounds": None if p.bounds is None else list(p.bounds_range()[:2])}
+                        "bounds": None if p.bounds is None else list(p.bounds_range()[:2]),
+                        "sampled_as": (sampler_site(p.name) if p.name in self.sampler_scales
+                                       else None)}
                        for p in self.params],
         }
+
+
+def sampler_site(name: str) -> str:
+    """The sample site of parameter ``name`` when its law gives it a sampler scale
+    (:attr:`ContactLaw.sampler_scales`): the value times the scale."""
+    return f"{name}_scaled"
 
 
 def _prior_text(p: Param) -> str:

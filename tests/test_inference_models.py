@@ -183,6 +183,48 @@ def test_without_observations_drops_observed_values():
     assert d["n_protocols"] == 4
 
 
+def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
+    """Maugis-Dugdale samples gamma as gamma |Pbar_c(lam)| (models.law sampler_scales):
+    (gamma, lam) keep the law's priors, independent (a change of variables, not a new
+    prior); gamma is a deterministic site; simulate() conditions a truth for gamma through
+    the scaled site, and refuses a truth it would otherwise ignore."""
+    from scipy import stats
+
+    from models import maugis_dugdale_static as static
+    from models.registry import get_law
+
+    law = get_law("maugis_dugdale")
+    pg, pl = law.param("gamma").prior, law.param("lam").prior
+    assert (pg.kind, pl.kind) == ("lognormal", "loguniform")
+    model = build_model(ModelSpec("maugis_dugdale", rung="backbone"))
+    draws = Predictive(model, num_samples=4000)(jax.random.PRNGKey(1), design(1))
+    g, lam = np.log(np.asarray(draws["gamma"])), np.log(np.asarray(draws["lam"]))
+    n = g.size
+    assert abs(g.mean() - np.log(pg.a)) < 4.0 * pg.b / np.sqrt(n)
+    assert abs(g.std() - pg.b) < 4.0 * pg.b / np.sqrt(2.0 * n)
+    assert stats.kstest(lam, "uniform", args=(np.log(pl.a), np.log(pl.b / pl.a))).pvalue > 1e-3
+    assert abs(np.corrcoef(g, lam)[0, 1]) < 4.0 / np.sqrt(n)
+    truth = {"young": 2e11, "gamma": 0.7, "lam": 1.0}
+    _, tr = simulate(model, design(2), truth, seed=0)
+    assert float(tr["gamma"]) == pytest.approx(0.7, rel=1e-12)
+    assert float(tr["gamma_scaled"]) == pytest.approx(-0.7 * float(static.pull_off(1.0)),
+                                                      rel=1e-12)
+    with pytest.raises(ValueError, match="give \\['lam'\\]"):
+        simulate(model, design(2), {"young": 2e11, "gamma": 0.7})
+    with pytest.raises(ValueError, match="gama"):
+        simulate(model, design(2), {"young": 2e11, "gama": 0.7, "lam": 1.0})
+    # the scaled site is described in an InferenceData (no unit: gamma's times a scale)
+    import arviz as az
+
+    from inference.sample import describe
+
+    idata = describe(az.from_dict(posterior={"gamma_scaled": np.ones((1, 3)),
+                                             "gamma": np.ones((1, 3))}))
+    attrs = idata.posterior["gamma_scaled"].attrs
+    assert "gamma times its law's sampler scale" in attrs["description"]
+    assert "units" not in attrs and idata.posterior["gamma"].attrs["units"] == "J m-2"
+
+
 SCENE_KW = {"load": SCENE.load, "mass": SCENE.mass, "radius": R}
 
 

@@ -1,10 +1,11 @@
 """Full parameter recovery and evidence ranking on synthetic data from each contact law
-(slow: ``pytest -m slow tests/test_recovery.py``; 36 NUTS fits, six laws on six
+(slow: ``pytest -m slow tests/test_recovery.py``; 49 NUTS fits, seven laws on seven
 datasets).
 
 For every contact law of the registry that the inference supports (``models.registry``
 laws that ``inference.numpyro_models`` builds and ``beadrod compare`` fits, and that
-have a truth below: hertz, powerlaw, viscoelastic, jkr, dmt, greenwood_williamson) one
+have a truth below: hertz, powerlaw, viscoelastic, jkr, dmt, greenwood_williamson,
+maugis_dugdale) one
 dataset is simulated from that law, with the exact ModelSpec the comparison
 pipeline fits (``workflows.pipeline.comparison_specs`` at the default rung of
 ``workflows.config.DEFAULTS``, the exact backbone for every law). Then
@@ -29,6 +30,8 @@ Truths (noise levels as in the embedded data, data/README.md):
   E = 200 GPa; power law n = 2.2 (mid-prior, far from Hertz's 3/2) with
   delta0_ref = 72 nm (f0 ~ 2.75 kHz); viscoelastic eta = 0.15 MPa s (Q ~ 37, inside the
   measured 20-100); JKR gamma = 0.7 J/m^2 (the paper's value, F0/Fc ~ 3), DMT the same;
+  Maugis-Dugdale gamma = 0.7 J/m^2 and lam = 1 (the middle of the JKR-DMT transition,
+  where its curve differs most from both limits; fixed before the first run);
   rough sphere roughness_factor = 1 (sigma = the scene's 25 nm, its prior median: the
   overlap from the outermost summits is 190 nm, delta0'/sigma = 7.7 inside the law's
   domain >= 3, so x <= 0.22 on this design);
@@ -38,15 +41,15 @@ Truths (noise levels as in the embedded data, data/README.md):
   viscoelastic sigma_logq = 0.05 (the embedded data's Q measurement noise; in a
   viscoelastic world Q_p is fixed by eta, E and f0_p, so only measurement noise remains).
 
-Coverage criterion. A law has k = 6 or 7 latent parameters; each central 90 % interval
+Coverage criterion. A law has k = 6 to 8 latent parameters; each central 90 % interval
 misses its truth with probability 0.1 even for an exact posterior, so "all k cover"
-would fail 47-52 % of the time by chance. The test asserts instead, per law:
+would fail 47-57 % of the time by chance. The test asserts instead, per law:
 (a) at most two of the k 90 % intervals miss (Binomial(k, 0.1): P(>= 3 misses) = 1.6 %
-for k = 6, 2.6 % for k = 7), and (b) no gross bias: every truth within Z_GROSS = 3.29
-posterior standard deviations of the posterior mean, in the sampler's coordinates (log
-for a positive parameter), the two-sided 0.1 % of a normal posterior (P(some truth
-beyond) = 0.6-0.7 % per law). Under exact calibration a law then passes with
-probability 0.97-0.98, and all six with ~0.84. The seeds were fixed before the first run
+for k = 6, 2.6 % for k = 7, 3.8 % for k = 8), and (b) no gross bias: every truth within
+Z_GROSS = 3.29 posterior standard deviations of the posterior mean, in the sampler's
+coordinates (log for a positive parameter), the two-sided 0.1 % of a normal posterior
+(P(some truth beyond) = 0.6-0.8 % per law). Under exact calibration a law then passes
+with probability 0.95-0.98, and all seven with ~0.80. The seeds were fixed before the first run
 and never tuned. Two choices were made after runs, and are recorded here: the allowance
 of two misses, after viscoelastic (delta0_scatter, sigma_logq) and later JKR (mu_logq,
 sigma_shift) missed two each, 4 of 26 intervals in all (2.6 expected); and (b), which
@@ -85,6 +88,16 @@ Then:
     5 % Q noise. With a Q scatter several times the f0 scatter (e.g. sigma_logq = 0.3) the
     two would tie and Hertz would win by the Occam factor of eta's wide prior (~1.3 nat):
     this test does not claim the viscoelastic law is identifiable from such data.
+
+Maugis-Dugdale (added 2026-12, with its truth, seed and the ties with JKR and DMT above
+fixed before its first run as a generator). That run found, on its data (lam = 1), JKR,
+DMT and Maugis-Dugdale within 0.2 nat (log Z 2131.23, 2131.17, 2131.07 +- 0.05): on this
+design lam is not identified (its posterior spans its prior, 90 % interval [0.18, 76]) and
+each limit matches the data with a gamma of its own; what the data fix is the pull-off
+force. The three are therefore tied in both directions; this was decided after that run.
+The same run found Maugis-Dugdale's own fit failing the gate (R-hat 1.05, bulk ESS 160):
+its gamma followed a curved ridge over ln lam; the law now samples gamma scaled by its
+pull-off coefficient (models.maugis_dugdale), which straightens it.
 
 Chains. Until 2026-12 the fits ran 2 chains x 1000 draws, half the comparison's, against
 the same gate (ESS >= 400 summed over chains, set for the comparison's four). DMT on
@@ -129,6 +142,7 @@ TRUTHS: dict[str, dict[str, float]] = {
     "dmt": {"young": 200e9, "gamma": 0.7, **_COMMON, **_Q_NUISANCE},
     "greenwood_williamson": {"young": 200e9, "roughness_factor": 1.0, **_COMMON,
                              **_Q_NUISANCE},
+    "maugis_dugdale": {"young": 200e9, "gamma": 0.7, "lam": 1.0, **_COMMON, **_Q_NUISANCE},
 }
 # the registry's laws that the inference builds and the comparison loop fits
 LAWS = tuple(name for name in registry.law_names()
@@ -136,13 +150,17 @@ LAWS = tuple(name for name in registry.law_names()
 SPECS = comparison_specs(list(LAWS), DEFAULTS["rung"], "normal")
 
 DATA_SEEDS = {"hertz": 10, "powerlaw": 11, "viscoelastic": 12, "jkr": 13, "dmt": 14,
-              "greenwood_williamson": 15}
+              "greenwood_williamson": 15, "maugis_dugdale": 16}
 _S = DEFAULTS["sampling"]
 NUTS = {"num_warmup": _S["warmup"], "num_samples": _S["samples"], "num_chains": _S["chains"],
         "target_accept": _S["target_accept"], "seed": 0, "predictive": False}
 # (generator, other): the generator is nested in / tied with the other law at this rung
-# (Hertz is also the rough sphere's sigma -> 0 limit, in the tail of its prior)
-NESTED = {("hertz", "powerlaw"), ("hertz", "viscoelastic"), ("hertz", "greenwood_williamson")}
+# (Hertz is also the rough sphere's sigma -> 0 limit, in the tail of its prior; JKR and
+# DMT are Maugis-Dugdale's lam -> inf and lam -> 0 limits, which its prior's ends 100 and
+# 0.1 approach; on Maugis-Dugdale data the three tie: module docstring)
+NESTED = {("hertz", "powerlaw"), ("hertz", "viscoelastic"), ("hertz", "greenwood_williamson"),
+          ("jkr", "maugis_dugdale"), ("dmt", "maugis_dugdale"),
+          ("maugis_dugdale", "jkr"), ("maugis_dugdale", "dmt")}
 MAX_MISSES_90 = 2
 # a law this far below the generator [nat] needs only its posterior bulk mixed (below)
 FAR_BEHIND = 50.0
@@ -191,13 +209,14 @@ def fits() -> _Fits:
 
 
 def test_every_supported_law_has_a_truth():
-    """The parametrisation covers the supported laws, and each truth names exactly the
+    """The parametrisation covers the registered laws, and each truth names exactly the
     latent sites of the model the comparison fits (nothing is left to the prior)."""
     import jax
     from numpyro import handlers
 
-    assert set(LAWS) == {"hertz", "powerlaw", "viscoelastic", "jkr", "dmt",
-                         "greenwood_williamson"}
+    # every registered law but the two-eta viscoelastic one, whose data-generating physics
+    # is the one-eta law's (eta_shift = eta_q) and which adds no recovery check of its own
+    assert set(registry.law_names()) - set(LAWS) == {"viscoelastic_split"}
     assert set(TRUTHS) == set(LAWS) == set(DATA_SEEDS)
     des = design_inputs(SCENE, n_protocols=2, amplitudes=AMPLITUDES[:2])
     for law in LAWS:
@@ -205,7 +224,8 @@ def test_every_supported_law_has_a_truth():
         sites = tr.get_trace(des)
         latent = {k for k, s in sites.items() if s["type"] == "sample" and not s["is_observed"]
                   and k not in ("f0_obs", "shift_obs", "q_obs")}
-        assert latent == set(TRUTHS[law]), (law, latent)
+        # a parameter with a sampler scale is sampled at its own site (models.law)
+        assert latent == set(registry.get_law(law).sampler_values(TRUTHS[law])), (law, latent)
 
 
 def _coverage_rows(idata, truth: dict[str, float]) -> list[dict[str, Any]]:
@@ -242,8 +262,10 @@ def test_recovery_covers_truth(law, fits):
     _, trace = fits.data(law)
     truth = TRUTHS[law]
     latent = {k for k, v in fit.idata.posterior.data_vars.items() if v.ndim == 2}
-    # every scalar latent site has a truth (the deterministics e_star, f0_pred aside)
-    assert latent - {"e_star", "f0_pred"} == set(truth), (law, latent)
+    # every scalar latent site has a truth (the deterministics e_star, f0_pred and the
+    # sample sites of parameters with a sampler scale aside)
+    scaled = set(registry.get_law(law).sampler_values(truth)) - set(truth)
+    assert latent - {"e_star", "f0_pred"} - scaled == set(truth), (law, latent)
     for k, v in truth.items():
         assert float(trace[k]) == pytest.approx(v)  # the simulation used the truth
     rows = _coverage_rows(fit.idata, truth)

@@ -33,6 +33,9 @@ def _text(rows: list[dict]) -> str:
             if p["bounds"] is not None:
                 dom += (f", physically in [{p['bounds'][0]:g}, {p['bounds'][1]:g}] "
                         f"{p['unit']}")
+            if p.get("sampled_as"):
+                dom += (f"; NUTS moves in {p['sampled_as']} (its value times a scale the "
+                        "law sets, the prior unchanged)")
             out.append(f"  - {p['name']} [{p['unit']}]: prior {p['prior']}{dom}")
     return "\n".join(out)
 
