@@ -197,7 +197,8 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     pg, pl = law.param("gamma").prior, law.param("lam").prior
     assert (pg.kind, pl.kind) == ("lognormal", "loguniform")
     model = build_model(ModelSpec("maugis_dugdale", rung="backbone"))
-    draws = Predictive(model, num_samples=4000)(jax.random.PRNGKey(1), design(1))
+    draws = Predictive(model, num_samples=4000, return_sites=["gamma", "lam"])(
+        jax.random.PRNGKey(1), design(1))
     g, lam = np.log(np.asarray(draws["gamma"])), np.log(np.asarray(draws["lam"]))
     n = g.size
     assert abs(g.mean() - np.log(pg.a)) < 4.0 * pg.b / np.sqrt(n)
