@@ -209,8 +209,12 @@ def _theta(law, spec: ModelSpec) -> dict[str, Any]:
             # p s ~ the law's prior of p scaled by s (a change of variables: p keeps its
             # prior); the sampler's coordinate is that of p s (models.law.ContactLaw)
             s = scale(**{k: theta[k] for k in theta})
+            base = law_prior(p, spec.overrides)
+            # the transform's domain is the prior's support, so that the scaled site's
+            # support is its image (p > 0: p s > 0, unconstrained as ln(p s)); the default
+            # domain, the real line, would let the sampler move p s through zero
             scaled = numpyro.sample(sampler_site(p.name), dist.TransformedDistribution(
-                law_prior(p, spec.overrides), dist.transforms.AffineTransform(0.0, s)))
+                base, dist.transforms.AffineTransform(0.0, s, domain=base.support)))
             theta[p.name] = numpyro.deterministic(p.name, scaled / s)
     return {p.name: theta[p.name] for p in law.params}
 

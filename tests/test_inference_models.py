@@ -210,6 +210,14 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     assert float(tr["gamma"]) == pytest.approx(0.7, rel=1e-12)
     assert float(tr["gamma_scaled"]) == pytest.approx(-0.7 * float(static.pull_off(1.0)),
                                                       rel=1e-12)
+    # NUTS moves in ln(gamma_scaled): a positive parameter's scaled site stays positive
+    from numpyro import handlers
+
+    latent = {k: v for k, v in tr.items() if k in set(law.sampler_values(truth)) | {
+        "delta0_scatter", "offset_down", "sigma_shift", "mu_logq", "tau_logq"}}
+    z = unconstrain_fn(handlers.seed(model, 0), (design(2),), {}, latent)
+    assert float(z["gamma_scaled"]) == pytest.approx(np.log(float(tr["gamma_scaled"])),
+                                                     rel=1e-12)
     with pytest.raises(ValueError, match="give \\['lam'\\]"):
         simulate(model, design(2), {"young": 2e11, "gamma": 0.7})
     with pytest.raises(ValueError, match="gama"):
