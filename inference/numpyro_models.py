@@ -201,14 +201,15 @@ def paper_spec(law: str, **kw: Any) -> ModelSpec:
 
 def _theta(law, spec: ModelSpec) -> dict[str, Any]:
     # the parameters without a sampler scale first: a scale is a function of them
-    theta = {p.name: numpyro.sample(p.name, law_prior(p, spec.overrides))
-             for p in law.params if p.name not in law.sampler_scales}
+    free = {p.name: numpyro.sample(p.name, law_prior(p, spec.overrides))
+            for p in law.params if p.name not in law.sampler_scales}
+    theta = dict(free)
     for p in law.params:
         scale = law.sampler_scales.get(p.name)
         if scale is not None:
             # p s ~ the law's prior of p scaled by s (a change of variables: p keeps its
             # prior); the sampler's coordinate is that of p s (models.law.ContactLaw)
-            s = scale(**{k: theta[k] for k in theta})
+            s = scale(**free)
             base = law_prior(p, spec.overrides)
             # the transform's domain is the prior's support, so that the scaled site's
             # support is its image (p > 0: p s > 0, unconstrained as ln(p s)); the default
