@@ -208,6 +208,14 @@ class ContactLaw:
     and not p, which a dense mass matrix cannot follow where s varies over the other
     parameters' range (the law says why in its module).
 
+    ``prepare(**kw)`` -> keywords added by :meth:`resolve`: an intermediate that several
+    of the law's functions read (Maugis-Dugdale's static state), computed once per set of
+    resolved keywords instead of once per function; in a sampler's step, once instead of
+    at every place the log density reads it (and once in its gradient). The functions
+    must give the same values without it (keywords built by hand), and must not use it
+    where the keywords it was computed from have since changed (the law's module says how
+    it checks that).
+
     ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
     behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
     ``tension_param`` names the loss parameter of the shared law, which the split law
@@ -238,6 +246,7 @@ class ContactLaw:
     tension_param: str | None = None
     cost: float = 1.0
     sampler_scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+    prepare: Callable[..., Mapping[str, Any]] | None = None
 
     def __post_init__(self) -> None:
         names = set(self.param_names)
@@ -289,12 +298,15 @@ class ContactLaw:
     def resolve(self, scene: Mapping[str, Any], theta: Mapping[str, Any]) -> dict[str, Any]:
         """Keywords for the law's functions: scene quantities overlaid by ``theta``.
 
-        ``e_star`` follows ``young`` and ``poisson`` unless it is a law parameter.
+        ``e_star`` follows ``young`` and ``poisson`` unless it is a law parameter; the
+        law's ``prepare`` adds its shared intermediates.
         """
         kw = {k: scene[k] for k in SCENE_KEYS if k in scene}
         kw.update(theta)
         if "e_star" not in self.param_names and "young" in kw and "poisson" in kw:
             kw["e_star"] = effective_modulus(kw["young"], kw["poisson"])
+        if self.prepare is not None:
+            kw.update(self.prepare(**kw))
         return kw
 
     # --------------------------------------------------------------------- physics

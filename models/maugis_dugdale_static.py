@@ -54,8 +54,8 @@ from . import maugis_dugdale_contact as md
 from ._tables import rebuild_cli
 
 __all__ = ["TABLE_PATH", "R_EDGES", "LAM_RANGE", "build", "load", "pull_off", "load_ratio",
-           "state", "exact_state", "in_range", "static_overlap", "overlap_from_frequency",
-           "frequency_from_overlap"]
+           "state", "contact_state", "exact_state", "in_range", "static_overlap",
+           "overlap_from_frequency", "frequency_from_overlap"]
 
 TABLE_PATH = pathlib.Path(__file__).with_name("data") / "md_static.npz"
 R_EDGES = (0.3, 10.0, 1000.0)
@@ -185,15 +185,18 @@ def pull_off(lam: ArrayLike) -> jnp.ndarray:
 
 
 def load_ratio(load: ArrayLike, *, radius: ArrayLike, gamma: ArrayLike,
-               lam: ArrayLike) -> jnp.ndarray:
-    """r = F0/Fc [-], Fc = -Pbar_c(lam) pi w R the pull-off force [N] (w = 2 gamma)."""
+               lam: ArrayLike, pc: ArrayLike | None = None) -> jnp.ndarray:
+    """r = F0/Fc [-], Fc = -Pbar_c(lam) pi w R the pull-off force [N] (w = 2 gamma);
+    ``pc``: Pbar_c(lam) where the caller has it."""
     fs = md.scales(e_star=1.0, radius=radius, gamma=gamma)[2]
-    return jnp.asarray(load, float) / (-pull_off(lam) * fs)
+    return jnp.asarray(load, float) / (-(pull_off(lam) if pc is None else pc) * fs)
 
 
-def state(r: ArrayLike, lam: ArrayLike) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
+def state(r: ArrayLike, lam: ArrayLike,
+          pc: ArrayLike | None = None) -> tuple[jnp.ndarray, jnp.ndarray, jnp.ndarray]:
     """(ln n, ln D, Pbar_c) [-] at load ratio r and lam (module doc), from the tables;
-    NaN where r <= 0 or lam is outside :data:`LAM_RANGE`. Differentiable in both."""
+    NaN where r <= 0 or lam is outside :data:`LAM_RANGE`. Differentiable in both.
+    ``pc``: Pbar_c(lam) where the caller has it (it is returned as given)."""
     r, lam = jnp.broadcast_arrays(jnp.asarray(r, float), jnp.asarray(lam, float))
     t = load()
     i, nu_r, off = _r_coordinate(jnp.where(r > 0.0, r, 1.0))
@@ -203,33 +206,52 @@ def state(r: ArrayLike, lam: ArrayLike) -> tuple[jnp.ndarray, jnp.ndarray, jnp.n
     ok = _valid(lam, r > 0.0)
     mask = lambda v: jnp.where(ok, v, jnp.nan)
     return (mask(pick(t["ln_n"]) - off), mask(pick(t["ln_d"]) - (2.0 / 3.0) * off),
-            pull_off(lam))
+            pull_off(lam) if pc is None else pc)
+
+
+def contact_state(load: ArrayLike, *, radius: ArrayLike, gamma: ArrayLike,
+                  lam: ArrayLike) -> tuple[jnp.ndarray, ...]:
+    """(r, ln n, ln D, Pbar_c) [-] under the load F0 [N]: :func:`load_ratio` and
+    :func:`state`, Pbar_c evaluated once. What the law's overlap maps read; a sampler's
+    model computes it once a step and hands it to all of them (``state=``)."""
+    pc = pull_off(lam)
+    r = load_ratio(load, radius=radius, gamma=gamma, lam=lam, pc=pc)
+    return (r, *state(r, lam, pc)[:2], pc)
+
+
+def _held(state, load, radius, gamma, lam):
+    return contact_state(load, radius=radius, gamma=gamma, lam=lam) if state is None \
+        else state
 
 
 def static_overlap(load: ArrayLike, *, e_star: ArrayLike, radius: ArrayLike,
-                   gamma: ArrayLike, lam: ArrayLike) -> jnp.ndarray:
+                   gamma: ArrayLike, lam: ArrayLike, state: tuple | None = None) -> jnp.ndarray:
     """delta0 = d_s D Pbar0^(2/3) [m] under the load F0 [N] (as
-    :func:`models.maugis_dugdale.static_overlap`, from the tables)."""
+    :func:`models.maugis_dugdale.static_overlap`, from the tables). ``state``: the
+    :func:`contact_state` at these keywords, where the caller has it."""
     _, d_s, fs = md.scales(e_star=e_star, radius=radius, gamma=gamma)
     pbar0 = jnp.asarray(load, float) / fs
-    _, ln_d, _ = state(load_ratio(load, radius=radius, gamma=gamma, lam=lam), lam)
+    ln_d = _held(state, load, radius, gamma, lam)[2]
     return d_s * jnp.exp(ln_d + (2.0 / 3.0) * jnp.log(pbar0))
 
 
 def overlap_from_frequency(f0: ArrayLike, load: ArrayLike, mass: ArrayLike, *,
-                           radius: ArrayLike, gamma: ArrayLike, lam: ArrayLike) -> jnp.ndarray:
+                           radius: ArrayLike, gamma: ArrayLike, lam: ArrayLike,
+                           state: tuple | None = None) -> jnp.ndarray:
     """delta0 = n F0/(m omega0^2) [m] at f0 [Hz] (as
-    :func:`models.maugis_dugdale.overlap_from_frequency`, from the tables; E* drops out)."""
-    ln_n, _, _ = state(load_ratio(load, radius=radius, gamma=gamma, lam=lam), lam)
+    :func:`models.maugis_dugdale.overlap_from_frequency`, from the tables; E* drops out;
+    ``state`` as for :func:`static_overlap`)."""
+    ln_n = _held(state, load, radius, gamma, lam)[1]
     omega2 = jnp.square(2.0 * jnp.pi * jnp.asarray(f0, float))
     return jnp.exp(ln_n) * load / (mass * omega2)
 
 
 def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike, *,
-                           radius: ArrayLike, gamma: ArrayLike, lam: ArrayLike) -> jnp.ndarray:
+                           radius: ArrayLike, gamma: ArrayLike, lam: ArrayLike,
+                           state: tuple | None = None) -> jnp.ndarray:
     """f0 = (n F0/(m delta0))^(1/2)/(2 pi) [Hz]: the inverse of
-    :func:`overlap_from_frequency`."""
-    ln_n, _, _ = state(load_ratio(load, radius=radius, gamma=gamma, lam=lam), lam)
+    :func:`overlap_from_frequency` (``state`` as there)."""
+    ln_n = _held(state, load, radius, gamma, lam)[1]
     return jnp.sqrt(jnp.exp(ln_n) * load / (mass * jnp.asarray(delta0, float))) / (2 * jnp.pi)
 
 

@@ -93,3 +93,40 @@ def test_stored_table_is_what_the_builder_makes():
     assert set(fresh) == set(stored)
     for k in fresh:
         np.testing.assert_allclose(fresh[k], stored[k], rtol=0.0, atol=1e-13)
+
+
+def test_the_prepared_state_is_used_only_with_the_keywords_it_was_computed_from():
+    """ContactLaw.prepare: resolve adds the static state once; the overlaps, the reference
+    overlap and the backbone are the same with it as with keywords built by hand
+    (bit for bit), and keywords whose gamma changed after resolve get the new gamma's
+    values, not the held state's (a stale state would give the old ones)."""
+    law = md.LAW
+    scene = {"radius": R_BEAD, "young": 200e9, "poisson": NU, "load": LOAD, "mass": MASS}
+    kw = law.resolve(scene, {"young": 200e9, "gamma": 0.7, "lam": 3.0})
+    assert "maugis_dugdale_state" in kw
+    bare = {k: v for k, v in kw.items() if k != "maugis_dugdale_state"}
+    f0, x = jnp.array([2500.0, 2800.0]), jnp.array([0.2, 0.9, 1.4])
+
+    def values(k):
+        d0 = law.overlap_at(f0, **k)
+        return [law.overlap(**k), d0, law.frequency_at(jnp.array([4e-8, 6e-8]), **k),
+                law.shift(x, rung="backbone", delta0=d0[0], omega0=1.0, **k)]
+
+    for a, b in zip(values(kw), values(bare)):
+        np.testing.assert_array_equal(a, b)
+    changed = {**kw, "gamma": 2.0}
+    fresh = law.resolve(scene, {"young": 200e9, "gamma": 2.0, "lam": 3.0})
+    for a, b, c in zip(values(changed), values(fresh), values(kw)):
+        np.testing.assert_array_equal(a, b)
+        assert not np.allclose(a, c)
+    # the sampler's case: one state in the traced log density, the same gradient
+    def total(g, k0):
+        k = law.resolve(scene, {"young": 200e9, "gamma": g, "lam": 3.0})
+        if not k0:
+            k = {key: v for key, v in k.items() if key != "maugis_dugdale_state"}
+        d0 = law.overlap_at(f0, **k)
+        return jnp.sum(jnp.log(d0)) + jnp.log(law.overlap(**k)) + jnp.sum(
+            law.shift(x, rung="backbone", delta0=d0[0], omega0=1.0, **k))
+
+    g1, g2 = (jax.grad(total)(0.7, k0) for k0 in (True, False))
+    assert float(g1) == pytest.approx(float(g2), rel=1e-12)
