@@ -82,7 +82,7 @@ def _law():
 
     # the static state (r, ln n, ln D, Pbar_c) is read by the overlap maps, the reference
     # overlap, the backbone and its domain: computed once per resolve, not by each (one
-    # core, the NUTS step on the embedded data: 57 -> 49 us). It is kept with the objects
+    # core, the NUTS step on the embedded data: 57 -> 48 us). It is kept with the objects
     # it was computed from, and a function whose keywords hold other ones (gamma changed
     # after resolve, keywords built by hand) computes its own
     def prepare(**kw):
