@@ -43,8 +43,8 @@ import numpy as np
 
 from .rungs import LADDER
 
-__all__ = ["Prior", "Param", "ContactLaw", "SCENE_KEYS", "RungUnavailable", "effective_modulus",
-           "prior_median", "sampler_site"]
+__all__ = ["Prior", "Param", "Prepared", "ContactLaw", "SCENE_KEYS", "RungUnavailable",
+           "effective_modulus", "prior_median", "sampler_site"]
 
 SCENE_KEYS = ("radius", "young", "poisson", "e_star", "load", "mass", "gravity",
               "roughness_rms", "surface_energy")
@@ -168,6 +168,39 @@ class Param:
         return None
 
 
+@dataclass(frozen=True)
+class Prepared:
+    """An intermediate ``compute(**kw)`` that several of a law's functions read, computed
+    once by :meth:`ContactLaw.resolve` and stored in the keywords under ``name`` with the
+    objects of ``inputs`` (keyword names) it was computed from.
+
+    Why the objects are kept: keywords are plain dicts, and a caller may change one
+    after resolve (``{**kw, "gamma": 2.0}``) or build them by hand; :meth:`value` uses
+    the stored result only while every input is the same object (checked while tracing,
+    nothing in a compiled program), else computes it afresh: never stale, at worst not
+    shared."""
+
+    name: str
+    inputs: tuple[str, ...]
+    compute: Callable[..., Any]
+
+    def entry(self, kw: Mapping[str, Any]) -> dict[str, Any]:
+        """``{name: (inputs, value)}`` for :meth:`ContactLaw.resolve` (empty if an input
+        is missing)."""
+        if not all(k in kw for k in self.inputs):
+            return {}
+        return {self.name: (tuple(kw[k] for k in self.inputs), self.compute(**kw))}
+
+    def value(self, kw: Mapping[str, Any]) -> Any:
+        """The stored value if ``kw`` still holds the objects it was computed from, else
+        ``compute(**kw)``."""
+        got = kw.get(self.name)
+        if (isinstance(got, tuple) and len(got) == 2
+                and all(a is kw.get(k) for a, k in zip(got[0], self.inputs))):
+            return got[1]
+        return self.compute(**kw)
+
+
 @dataclass(frozen=True, eq=False)
 class ContactLaw:
     """One contact law (see the module docstring). Instances compare by identity.
@@ -208,13 +241,12 @@ class ContactLaw:
     and not p, which a dense mass matrix cannot follow where s varies over the other
     parameters' range (the law says why in its module).
 
-    ``prepare(**kw)`` -> keywords added by :meth:`resolve`: an intermediate that several
-    of the law's functions read (Maugis-Dugdale's static state), computed once per set of
-    resolved keywords instead of once per function; in a sampler's step, once instead of
-    at every place the log density reads it (and once in its gradient). The functions
-    must give the same values without it (keywords built by hand), and must not use it
-    where the keywords it was computed from have since changed (the law's module says how
-    it checks that).
+    ``prepared``: :class:`Prepared` intermediates that several of the law's functions read
+    (Maugis-Dugdale's static state). :meth:`resolve` computes each once and adds it to the
+    keywords; the functions read it with :meth:`Prepared.value`, which recomputes it where
+    the keywords no longer hold the objects it was computed from. In a sampler's step it
+    is then computed once instead of at every place the log density reads it (and its
+    gradient taken once).
 
     ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
     behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
@@ -246,7 +278,7 @@ class ContactLaw:
     tension_param: str | None = None
     cost: float = 1.0
     sampler_scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
-    prepare: Callable[..., Mapping[str, Any]] | None = None
+    prepared: tuple[Prepared, ...] = ()
 
     def __post_init__(self) -> None:
         names = set(self.param_names)
@@ -284,11 +316,11 @@ class ContactLaw:
         out = {k: v for k, v in values.items() if k not in self.sampler_scales}
         others = {k: v for k, v in values.items()
                   if k in self.param_names and k not in self.sampler_scales}
+        missing = [p for p in self.param_names
+                   if p not in self.sampler_scales and p not in values]
         for name, scale in self.sampler_scales.items():
             if name not in values:
                 continue
-            missing = [p for p in self.param_names
-                       if p not in self.sampler_scales and p not in values]
             if missing:
                 raise ValueError(f"law '{self.name}': {name} is sampled scaled by the other "
                                  f"parameters; give {missing} with it")
@@ -299,14 +331,14 @@ class ContactLaw:
         """Keywords for the law's functions: scene quantities overlaid by ``theta``.
 
         ``e_star`` follows ``young`` and ``poisson`` unless it is a law parameter; the
-        law's ``prepare`` adds its shared intermediates.
+        law's ``prepared`` intermediates are added (:class:`Prepared`).
         """
         kw = {k: scene[k] for k in SCENE_KEYS if k in scene}
         kw.update(theta)
         if "e_star" not in self.param_names and "young" in kw and "poisson" in kw:
             kw["e_star"] = effective_modulus(kw["young"], kw["poisson"])
-        if self.prepare is not None:
-            kw.update(self.prepare(**kw))
+        for item in self.prepared:
+            kw.update(item.entry(kw))
         return kw
 
     # --------------------------------------------------------------------- physics

@@ -58,14 +58,10 @@ __all__ = [
 ]
 
 
-_INPUTS = ("load", "radius", "gamma", "lam")
-_STATE = "maugis_dugdale_state"   # the keyword of the prepared state (ContactLaw.prepare)
-
-
 def _law():
     from . import maugis_dugdale_orbit as orbit
     from . import maugis_dugdale_static as static
-    from .law import GAMMA, YOUNG, ContactLaw, Param, Prior
+    from .law import GAMMA, YOUNG, ContactLaw, Param, Prepared, Prior
     from .shape_backbone import backbone_fast, in_table
 
     lam = Param("lam", "-", r"$\lambda$", Prior("loguniform", *static.LAM_RANGE),
@@ -76,26 +72,13 @@ def _law():
                 "tabulated there, models.maugis_dugdale_static; NaN outside).",
                 domain=static.LAM_RANGE, what="the Maugis transition parameter")
 
-    def fresh(kw):
-        return static.contact_state(kw["load"], radius=kw["radius"], gamma=kw["gamma"],
-                                    lam=kw["lam"])
-
     # the static state (r, ln n, ln D, Pbar_c) is read by the overlap maps, the reference
     # overlap, the backbone and its domain: computed once per resolve, not by each (one
-    # core, the NUTS step on the embedded data: 57 -> 48 us). It is kept with the objects
-    # it was computed from, and a function whose keywords hold other ones (gamma changed
-    # after resolve, keywords built by hand) computes its own
-    def prepare(**kw):
-        if not all(k in kw for k in _INPUTS):
-            return {}
-        return {_STATE: (tuple(kw[k] for k in _INPUTS), fresh(kw))}
-
-    def held(kw):
-        got = kw.get(_STATE)
-        if (isinstance(got, tuple) and len(got) == 2
-                and all(a is kw.get(k) for a, k in zip(got[0], _INPUTS))):
-            return got[1]
-        return fresh(kw)
+    # core, the NUTS step on the embedded data: 57 -> 48 us)
+    state = Prepared("maugis_dugdale_state", ("load", "radius", "gamma", "lam"),
+                     lambda *, load, radius, gamma, lam, **_: static.contact_state(
+                         load, radius=radius, gamma=gamma, lam=lam))
+    held = state.value
 
     def ratio(kw):
         return held(kw)[0]
@@ -144,7 +127,7 @@ def _law():
         # gamma |Pbar_c(lam)| the ridge is straight: 11-14 steps, R-hat 1.002, bulk ESS
         # 1614 (tests/test_recovery.py)
         sampler_scales={"gamma": lambda *, lam, **_: -static.pull_off(lam)},
-        prepare=prepare,
+        prepared=(state,),
     )
 
 
