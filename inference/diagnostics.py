@@ -19,7 +19,7 @@ import numpy as np
 
 from . import mcmc_stats
 
-__all__ = ["Verdict", "check", "loo_report", "DiagnosticsFailed"]
+__all__ = ["Verdict", "check", "ess_minima", "loo_report", "DiagnosticsFailed"]
 
 log = logging.getLogger("beadrod.inference")
 
@@ -74,6 +74,18 @@ def _min_over_vars(ds, masks=None) -> float:
     vals = [np.ravel(ds[v])[masks[v]] if masks else np.ravel(ds[v]) for v in ds]
     vals = np.concatenate(vals) if vals else np.array([np.nan])
     return float(np.nanmin(vals)) if np.any(np.isfinite(vals)) else float("nan")
+
+
+def ess_minima(post: Any, var_names: list[str] | None = None) -> tuple[float, float]:
+    """(min bulk ESS, min tail ESS) over the draws ``post`` (a posterior dataset, or a dict
+    of arrays (chain, draw, ...)), as :func:`check` takes them: every variable, constant
+    elements left out."""
+    if var_names is None:
+        var_names = [v for v, m in _varying(post, list(post)).items() if m.any()]
+    masks = _varying(post, var_names)
+    stats = {v: mcmc_stats.gate_stats(np.asarray(post[v], float)) for v in var_names}
+    return (_min_over_vars({v: st[1] for v, st in stats.items()}, masks),
+            _min_over_vars({v: st[2] for v, st in stats.items()}, masks))
 
 
 def check(idata: az.InferenceData, *, rhat_max: float = 1.01, ess_min: float = 400.0,

@@ -22,7 +22,8 @@ from workflows.cli import COMMAND_MODULES, build_parser, main
 # --allow-failed: a few draws fail the gate, which would make the exit status 1
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--live-points", "30",
         "--smc-particles", "48", "--smc-seeds", "2", "--seed", "1", "--quiet", "--allow-failed",
-        "--workers", "1"]  # in process unless a test asks for workers (they come after)
+        "--workers", "1", "--extensions", "0"]  # in process unless a test asks for workers
+# (they come after); no extension of a tiny run short of ESS (tests/test_extensions.py)
 
 
 def _subcommands() -> list[str]:
@@ -133,6 +134,12 @@ def test_compare_outputs_exist_and_parse(compare_run):
     assert "no cross-check" in (out / "report.md").read_text()  # one estimator: said so
     assert result["data"]["hash"] and len(result["laws"]) == 3
     assert not list(out.rglob("*.part*")), "temporary files left behind"
+    # --extensions reaches the fits (a flag of its own, in the resolved config)
+    import tomllib
+
+    assert tomllib.loads((out / "config.resolved.toml").read_text())["sampling"][
+        "extensions"] == 0
+    assert az.from_netcdf(out / "idata" / "hertz.nc").posterior.attrs["extensions"] == 0
 
 
 def test_compare_html_embeds_every_image(compare_run):

@@ -14,7 +14,7 @@ from workflows.cli import main
 
 LAW_FILE = str(Path(__file__).parent / "laws" / "hertz_scratch.py")
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1", "--quiet",
-        "--allow-failed", "--evidence", "bridge", "--workers", "1"]
+        "--allow-failed", "--evidence", "bridge", "--workers", "1", "--extensions", "0"]
 
 
 def test_laws_lists_the_file(capsys):

@@ -24,7 +24,7 @@ from workflows.config import DEFAULTS, DESCRIPTIONS, leaf_keys
 
 ROOT = Path(__file__).parents[1]
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1", "--workers", "1",
-        "--evidence", "bridge"]
+        "--evidence", "bridge", "--extensions", "0"]
 NOFIG = "[report]\nfigures = false\n"
 
 

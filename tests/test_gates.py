@@ -3,7 +3,8 @@ and on fresh synthetic worlds of seeds the project was never tuned on, at the de
 sampling settings (workflows.config.DEFAULTS), every law at the comparison's default rung.
 
 The gate is the one ``beadrod compare`` applies (inference.diagnostics.check: R-hat,
-bulk and tail ESS, divergences, E-BFMI). Slow: one full-length NUTS run per model and
+bulk and tail ESS, divergences, E-BFMI), after the same extensions of a run short of ESS
+(``sampling.extensions``). Slow: one full-length NUTS run per model and
 world (about 15 min on 2 cores for all of them).
 """
 
@@ -52,19 +53,20 @@ def test_every_default_model_passes_its_gate(datasets, world, seed):
     from inference.sample import run_nuts
     from models.registry import DEFAULT_RUNG
     from workflows.config import DEFAULTS
-    from workflows.pipeline import comparison_specs
+    from workflows.pipeline import comparison_specs, gate_ess
 
     ds = datasets(world, seed)
     inputs = model_inputs(ds)
     s = DEFAULTS["sampling"]
-    ess_min = min(400.0, 0.4 * s["samples"] * s["chains"])  # as workflows.pipeline.fit_law
+    ess_min = gate_ess(s)
     failed = {}
     for name, spec in comparison_specs(_model_names(), DEFAULT_RUNG, "normal").items():
         fit = run_nuts(build_model(spec, scene=inputs.get("scene")), inputs,
                        num_warmup=s["warmup"], num_samples=s["samples"],
                        num_chains=s["chains"], target_accept=s["target_accept"],
                        seed=DEFAULTS["seed"], predictive=False,
-                       coords={"protocol": list(ds.protocol_ids)})
+                       coords={"protocol": list(ds.protocol_ids)}, ess_target=ess_min,
+                       max_extensions=s["extensions"])
         verdict = diagnostics.check(fit.idata, ess_min=ess_min)
         if not verdict.passed:
             failed[name] = str(verdict)

@@ -25,6 +25,7 @@ FLAG_KEYS: dict[str, str] = {
     "data": "data", "out": "out", "seed": "seed", "rung": "rung", "workers": "workers",
     "quiet": "quiet", "laws": "laws", "law": "laws",
     "chains": "sampling.chains", "warmup": "sampling.warmup", "samples": "sampling.samples",
+    "extensions": "sampling.extensions",
     "live_points": "evidence.live_points", "smc_particles": "evidence.smc_particles",
     "smc_seeds": "evidence.smc_seeds", "evidence": "evidence.methods",
     "robust": "likelihood.robust", "no_two_percent_rule": "likelihood.two_percent_rule",
@@ -123,7 +124,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_sampling_args(p: argparse.ArgumentParser) -> None:
-    """--seed, --chains, --workers, --warmup, --samples (compare, fit, rungs)."""
+    """--seed, --chains, --workers, --warmup, --samples, --extensions (compare, fit,
+    rungs)."""
     s = DEFAULTS["sampling"]
     p.add_argument("--seed", type=int, help="random seed: same seed, same numbers "
                    f"(default: {DEFAULTS['seed']})")
@@ -135,6 +137,9 @@ def add_sampling_args(p: argparse.ArgumentParser) -> None:
                    f"(default: {s['warmup']})")
     p.add_argument("--samples", type=int, help="NUTS draws per chain, >= 20 "
                    f"(default: {s['samples']})")
+    p.add_argument("--extensions", type=int, help="times a run whose smallest ESS is below "
+                   "the gate's goes on for as many draws again, >= 0 (default: "
+                   f"{s['extensions']})")
 
 
 class _HelpConfig(argparse.Action):

@@ -22,7 +22,7 @@ import numpy as np
 
 from ._io import write_json
 
-__all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law",
+__all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law", "gate_ess",
            "fit_steps", "inputs_digest"]
 
 log = logging.getLogger("beadrod")
@@ -264,6 +264,12 @@ def _cached(name: str, key: str, summary_path: Path, idata_path: Path) -> LawRun
     return LawRun(name, cached, idata)
 
 
+def gate_ess(sampling: dict[str, Any]) -> float:
+    """The ESS the gate asks of a fit with the ``sampling`` settings: 400, or 40 % of the
+    draws where there are fewer than 1000 (a smoke run's counts)."""
+    return min(400.0, 0.4 * sampling["samples"] * sampling["chains"])
+
+
 def fit_steps(cfg: dict[str, Any]) -> int:
     """Progress steps of one fit_law call: NUTS, diagnostics + LOO, one per estimator."""
     return 2 + len(cfg["evidence"]["methods"])
@@ -302,10 +308,12 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     begin(log, job, "%s: NUTS (%d chains x %d warmup + %d draws), model %s", name,
           s["chains"], s["warmup"], s["samples"], spec.name)
     t0 = time.perf_counter()
+    ess_min = gate_ess(s)
     fit = run_nuts(model, inputs, num_warmup=s["warmup"], num_samples=s["samples"],
                    num_chains=s["chains"], seed=cfg["seed"], target_accept=s["target_accept"],
                    data_hash=ds.data_hash, extra_attrs={"law": name},
-                   coords={"protocol": list(ds.protocol_ids)})
+                   coords={"protocol": list(ds.protocol_ids)}, ess_target=ess_min,
+                   max_extensions=s["extensions"])
     timings = dict(fit.timings)
     modes = fit.modes.to_dict() if fit.modes is not None else None
     if modes and modes["gap"] is not None and modes["gap"] < MODE_GAP_WARN:
@@ -314,7 +322,6 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
                     name, modes["gap"])
     done(log, job, "%s: NUTS done (%.0f s)", name, time.perf_counter() - t0)
     begin(log, job, "%s: diagnostics and LOO", name)
-    ess_min = min(400.0, 0.4 * s["samples"] * s["chains"])
     verdict = diagnostics.check(fit.idata, ess_min=ess_min)
     loo = diagnostics.loo_report(fit.idata)
     done(log, job, "%s: diagnostics %s", name, "passed" if verdict.passed else "FAILED")
