@@ -140,6 +140,8 @@ def test_compare_outputs_exist_and_parse(compare_run):
     assert tomllib.loads((out / "config.resolved.toml").read_text())["sampling"][
         "extensions"] == 0
     assert az.from_netcdf(out / "idata" / "hertz.nc").posterior.attrs["extensions"] == 0
+    assert json.loads((out / "laws" / "hertz.json").read_text())["diagnostics"][
+        "extensions"] == 0
 
 
 def test_compare_html_embeds_every_image(compare_run):

@@ -320,6 +320,11 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         log.warning("%s: a second posterior mode within %.1f nat of the one sampled: its "
                     "mass is missing from the evidence (bridge sampling fits one mode)",
                     name, modes["gap"])
+    extensions = int(fit.idata.posterior.attrs.get("extensions", 0))
+    if extensions:
+        log.warning("%s: ESS below the gate's %.0f after %d draws per chain: the chains went "
+                    "on %d time(s), %d draws per chain in all", name, ess_min, s["samples"],
+                    extensions, s["samples"] * (1 + extensions))
     done(log, job, "%s: NUTS done (%.0f s)", name, time.perf_counter() - t0)
     begin(log, job, "%s: diagnostics and LOO", name)
     verdict = diagnostics.check(fit.idata, ess_min=ess_min)
@@ -373,7 +378,8 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         "status": "ok" if not failures else "failed", "failures": failures,
         "diagnostics": {"rhat_max": verdict.rhat_max, "ess_bulk_min": verdict.ess_bulk_min,
                         "ess_tail_min": verdict.ess_tail_min,
-                        "divergences": verdict.divergences, "ebfmi_min": verdict.bfmi_min},
+                        "divergences": verdict.divergences, "ebfmi_min": verdict.bfmi_min,
+                        "extensions": extensions},
         "params": _param_summary(fit.idata, getattr(ds, "truth", None)),
         "log_z": first.log_z if first else None,
         "log_z_err": first.log_z_err if first else None,
