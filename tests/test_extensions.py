@@ -11,7 +11,8 @@ from inference.sample import run_nuts
 # run_nuts labels its output by the data's protocols and sweeps: one of each
 ONE = {"f0": np.ones(1), "q_idx": np.zeros(0, int), "amplitude": np.ones(1),
        "proto": np.zeros(1, int), "direction": np.zeros(1)}
-KW = dict(num_warmup=50, num_samples=30, num_chains=2, predictive=False, seed=3)
+KW = dict(num_warmup=50, num_samples=30, num_chains=2, predictive=False, seed=3,
+          init="median", max_extensions=2)
 
 
 def _toy(data):
@@ -19,28 +20,23 @@ def _toy(data):
 
 
 def test_a_run_short_of_its_target_goes_on_and_keeps_its_first_draws():
-    plain = run_nuts(_toy, ONE, **KW)
+    # a target met: no extension
+    met = run_nuts(_toy, ONE, ess_target=1.0, **KW)
+    assert met.idata.posterior.attrs["extensions"] == 0
+    assert met.idata.posterior.sizes["draw"] == 30 and "extension_s" not in met.timings
     # an unreachable target: every extension is drawn
-    longer = run_nuts(_toy, ONE, ess_target=1e9, max_extensions=2, **KW)
+    longer = run_nuts(_toy, ONE, ess_target=1e9, **KW)
     post = longer.idata.posterior
     assert post.sizes["draw"] == 90 and post.attrs["num_samples"] == 90
     assert post.attrs["extensions"] == 2 and longer.timings["extension_s"] > 0
     assert longer.idata.sample_stats.sizes["draw"] == 90
     x = np.asarray(post["x"])
     # the first draws are the run's without extensions, bit for bit
-    np.testing.assert_array_equal(x[:, :30], np.asarray(plain.idata.posterior["x"]))
+    np.testing.assert_array_equal(x[:, :30], np.asarray(met.idata.posterior["x"]))
     # the chains went on: neither restarted nor repeated
     assert not np.array_equal(x[:, 30:60], x[:, :30])
     assert not np.array_equal(x[:, 60:], x[:, 30:60])
-    # ... with the adaptation of the first run, from its last state: the draws of the
-    # extensions are the same posterior's (N(0, 1): 120 draws, ESS >= 60 at worst)
+    # ... with the first run's adaptation, from its last state: the extensions' draws are
+    # the same posterior's (N(0, 1): 120 draws, ESS >= 60 at worst)
     later = x[:, 30:].ravel()
     assert abs(later.mean()) < 4.0 / np.sqrt(later.size / 2) and 0.6 < later.std() < 1.5
-    assert plain.idata.posterior.attrs["extensions"] == 0
-
-
-def test_a_run_that_meets_its_target_draws_no_extension():
-    met = run_nuts(_toy, ONE, ess_target=1.0, max_extensions=2, **KW)
-    assert met.idata.posterior.attrs["extensions"] == 0
-    assert met.idata.posterior.sizes["draw"] == 30
-    assert "extension_s" not in met.timings
