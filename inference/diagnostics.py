@@ -76,16 +76,27 @@ def _min_over_vars(ds, masks=None) -> float:
     return float(np.nanmin(vals)) if np.any(np.isfinite(vals)) else float("nan")
 
 
-def ess_minima(post: Any, var_names: list[str] | None = None) -> tuple[float, float]:
-    """(min bulk ESS, min tail ESS) over the draws ``post`` (a posterior dataset, or a dict
-    of arrays (chain, draw, ...)), as :func:`check` takes them: every variable, constant
-    elements left out."""
+def _gate_stats(post: Any, var_names: list[str] | None):
+    # per variable: the mask of varying elements and (R-hat, bulk ESS, tail ESS); every
+    # variable that varies anywhere unless var_names says which
     if var_names is None:
         var_names = [v for v, m in _varying(post, list(post)).items() if m.any()]
+    # vectorised (inference.mcmc_stats; arviz's definitions): az.rhat / az.ess loop over
+    # the ~500 elements of a posterior in Python, 2-3 s per fit
     masks = _varying(post, var_names)
-    stats = {v: mcmc_stats.gate_stats(np.asarray(post[v], float)) for v in var_names}
+    return masks, {v: mcmc_stats.gate_stats(np.asarray(post[v], float)) for v in var_names}
+
+
+def _ess_minima(masks: dict, stats: dict) -> tuple[float, float]:
     return (_min_over_vars({v: st[1] for v, st in stats.items()}, masks),
             _min_over_vars({v: st[2] for v, st in stats.items()}, masks))
+
+
+def ess_minima(post: Any, var_names: list[str] | None = None) -> tuple[float, float]:
+    """(min bulk ESS, min tail ESS) of the draws ``post`` (a posterior dataset, or a dict
+    of arrays (chain, draw, ...)) as :func:`check` counts them: every variable, constant
+    elements left out."""
+    return _ess_minima(*_gate_stats(post, var_names))
 
 
 def check(idata: az.InferenceData, *, rhat_max: float = 1.01, ess_min: float = 400.0,
@@ -98,19 +109,10 @@ def check(idata: az.InferenceData, *, rhat_max: float = 1.01, ess_min: float = 4
     of a law with no shape parameter). NaN R-hat counts as a failure.
     """
     post = idata.posterior
-    if var_names is None:
-        var_names = [v for v, m in _varying(post, list(post.data_vars)).items() if m.any()]
-    # vectorised (inference.mcmc_stats; arviz's definitions): az.rhat / az.ess loop over
-    # the ~500 elements of a posterior in Python, 2-3 s per fit
-    masks = _varying(post, var_names)
-    stats = {v: mcmc_stats.gate_stats(np.asarray(post[v], float)) for v in var_names}
-    rhat = {v: st[0] for v, st in stats.items()}
-    ess_b = {v: st[1] for v, st in stats.items()}
-    ess_t = {v: st[2] for v, st in stats.items()}
-    r_all = np.concatenate([np.ravel(rhat[v])[masks[v]] for v in var_names])
+    masks, stats = _gate_stats(post, var_names)
+    r_all = np.concatenate([np.ravel(st[0])[masks[v]] for v, st in stats.items()])
     r_max = float(np.max(r_all)) if np.all(np.isfinite(r_all)) else float("nan")
-    eb = _min_over_vars(ess_b, masks)
-    et = _min_over_vars(ess_t, masks)
+    eb, et = _ess_minima(masks, stats)
     ss = idata.sample_stats
     div = int(np.asarray(ss["diverging"]).sum()) if "diverging" in ss else 0
     bfmi = float(np.min(az.bfmi(idata))) if "energy" in ss else float("nan")
