@@ -53,12 +53,12 @@ def test_every_default_model_passes_its_gate(datasets, world, seed):
     from inference.sample import run_nuts
     from models.registry import DEFAULT_RUNG
     from workflows.config import DEFAULTS
-    from workflows.pipeline import comparison_specs, gate_ess
+    from workflows.pipeline import comparison_specs
 
     ds = datasets(world, seed)
     inputs = model_inputs(ds)
     s = DEFAULTS["sampling"]
-    ess_min = gate_ess(s)
+    ess_min = diagnostics.gate_ess(s["samples"], s["chains"])
     failed = {}
     for name, spec in comparison_specs(_model_names(), DEFAULT_RUNG, "normal").items():
         fit = run_nuts(build_model(spec, scene=inputs.get("scene")), inputs,

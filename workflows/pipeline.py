@@ -22,7 +22,7 @@ import numpy as np
 
 from ._io import write_json
 
-__all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law", "gate_ess",
+__all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law",
            "fit_steps", "inputs_digest"]
 
 log = logging.getLogger("beadrod")
@@ -264,12 +264,6 @@ def _cached(name: str, key: str, summary_path: Path, idata_path: Path) -> LawRun
     return LawRun(name, cached, idata)
 
 
-def gate_ess(sampling: dict[str, Any]) -> float:
-    """The ESS the gate asks of a fit with the ``sampling`` settings: 400, or 40 % of the
-    draws where there are fewer than 1000 (a smoke run's counts)."""
-    return min(400.0, 0.4 * sampling["samples"] * sampling["chains"])
-
-
 def fit_steps(cfg: dict[str, Any]) -> int:
     """Progress steps of one fit_law call: NUTS, diagnostics + LOO, one per estimator."""
     return 2 + len(cfg["evidence"]["methods"])
@@ -308,7 +302,7 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     begin(log, job, "%s: NUTS (%d chains x %d warmup + %d draws), model %s", name,
           s["chains"], s["warmup"], s["samples"], spec.name)
     t0 = time.perf_counter()
-    ess_min = gate_ess(s)
+    ess_min = diagnostics.gate_ess(s["samples"], s["chains"])
     fit = run_nuts(model, inputs, num_warmup=s["warmup"], num_samples=s["samples"],
                    num_chains=s["chains"], seed=cfg["seed"], target_accept=s["target_accept"],
                    data_hash=ds.data_hash, extra_attrs={"law": name},
