@@ -206,8 +206,8 @@ def _law():
         # overlap) the average is exactly the Hertz one
         shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
                 "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw))},
-        # below the table's shape range, or beyond x = 2, the held value is not this
-        # law's backbone: the inference counts no point there (shape_backbone.in_table)
+        # outside the table's shape range (either end), or beyond x = 2, the held value is
+        # not this law's backbone: the inference counts no point there (shape_backbone.in_table)
         domains={"backbone": lambda x, **kw: in_table("dmt", x, ratio(kw))},
         # relative fit time (models.law.ContactLaw.cost): two-parameter backbone table
         cost=2.0,

@@ -369,6 +369,12 @@ def _law():
     def sigma(kw):
         return kw["roughness_rms"] * kw["roughness_factor"]
 
+    def reduced(delta0, kw):
+        # delta0'/sigma; an array division, so that sigma = 0 (a smooth sphere, the
+        # Hertz limit) gives inf, outside the table, where the generic path takes over
+        # (plain floats from the command line raised ZeroDivisionError)
+        return jnp.asarray(delta0, float) / sigma(kw)
+
     # the overlap delta' is counted from the contact edge -6 sigma (the outermost summits),
     # so the law is unilateral in delta' as models.generic expects; F/F' and the shape
     # are unchanged by the shift
@@ -409,12 +415,12 @@ def _law():
         overlap_from_frequency=_overlap_f0, frequency_from_overlap=_frequency,
         in_default_comparison=True,
         shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
-            "greenwood_williamson", x, delta0 / sigma(kw))},
+            "greenwood_williamson", x, reduced(delta0, kw))},
         # the law holds where summits carry the load (MIN_REDUCED_OVERLAP) and the table
         # covers the point (shape_backbone.in_table); the inference counts no point outside
         domains={"backbone": lambda x, *, delta0, **kw: in_table(
-            "greenwood_williamson", x, delta0 / sigma(kw))
-            & (delta0 / sigma(kw) >= MIN_REDUCED_OVERLAP)},
+            "greenwood_williamson", x, reduced(delta0, kw))
+            & (reduced(delta0, kw) >= MIN_REDUCED_OVERLAP)},
         # relative fit time (models.law.ContactLaw.cost): tabulated load-approach integral
         # and two-parameter backbone table
         cost=3.0,

@@ -82,8 +82,8 @@ def _law():
         shifts={"first_order": first_order,
                 "paper_eq25": first_order,
                 "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw))},
-        # below the table's shape range, or beyond x = 2, the held value is not this
-        # law's backbone: the inference counts no point there (shape_backbone.in_table)
+        # outside the table's shape range (either end), or beyond x = 2, the held value is
+        # not this law's backbone: the inference counts no point there (shape_backbone.in_table)
         domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw))},
         # relative fit time (models.law.ContactLaw.cost): the implicit contact-radius
         # solve and the two-parameter backbone table made it the slowest on the embedded data

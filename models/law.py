@@ -490,8 +490,10 @@ GAMMA = Param(
     "gamma", "J/m^2", r"$\gamma$", Prior("lognormal", 0.7, 0.5),
     "Surface energy of each surface (work of adhesion w = 2 gamma). Prior LogNormal("
     "median 0.7, sd of log 0.5) J/m^2: clean steel-steel surfaces are of order 1 J/m^2, "
-    "contaminated ones (air, oxide) a few tenths; the paper uses 0.7.",
-    scene_key="surface_energy", bounds="surface_energy_J_m2", what="the surface energy")
+    "contaminated ones (air, oxide) a few tenths; the paper uses 0.7. Defined for gamma > 0 "
+    "(at gamma = 0 an adhesive law is Hertz's: `--law hertz`).",
+    scene_key="surface_energy", domain=(0.0, 10.0), open_low=True,
+    bounds="surface_energy_J_m2", what="the surface energy")
 """gamma, shared by the adhesive laws."""
 
 __all__ += ["YOUNG", "GAMMA"]

@@ -110,7 +110,7 @@ def _law():
         restoring_force=orbit.restoring_force,
         shifts={"backbone": lambda x, **kw: backbone_fast("maugis_dugdale", x, ratio(kw),
                                                           kw["lam"])},
-        # below the table's load ratio, outside its lam range or beyond x = 2 the held
+        # outside the table's load ratios, outside its lam range or beyond x = 2 the held
         # value is not this law's backbone: the inference counts no point there
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                       kw["lam"])},

@@ -17,6 +17,7 @@ import tomllib
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from workflows.cli import build_parser, main
@@ -231,6 +232,38 @@ def test_shift_outside_a_table_is_the_laws_backbone_not_the_held_value(capsys):
     assert "defined for lam in [0.1, 100]" in capsys.readouterr().err
     assert main(["scene", "--param", "lam=0.01"]) == 2
     assert "defined for lam in [0.1, 100]" in capsys.readouterr().err
+
+
+
+@pytest.mark.parametrize("law,param", [
+    ("dmt", "gamma=1e-6"),
+    # the same rule (models.shape_backbone.in_table); their generic backbones take ~20 s
+    pytest.param("jkr", "gamma=1e-6", marks=pytest.mark.slow),
+    pytest.param("greenwood_williamson", "roughness_factor=0", marks=pytest.mark.slow)])
+def test_shift_past_a_tables_upper_end_is_hertz_not_the_held_value(capsys, law, param):
+    """Adhesion or roughness past a table's upper end (F0/Fc > 1000, D0' > 1e4): the law
+    is Hertz's to ~1e-7 here, but the value held at the table's end stands 2e-4 to 3e-4
+    from Hertz's backbone (it printed -0.16361 for JKR's -0.16343 at x = 1.5; sigma = 0
+    raised ZeroDivisionError). The command computes such points by the generic quadrature;
+    checked against Hertz's backbone by models.backbone (F ~ delta^(3/2), its own
+    quadrature, not the generic one's)."""
+    from models.backbone import backbone_shift
+
+    x = [0.5, 1.5]
+    assert main(["shift", "--law", law, "--method", "backbone", "--x", *map(str, x),
+                 "--param", param, "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["generic_at_x"] == x
+    np.testing.assert_allclose(got["delta_f_over_f0"], np.asarray(backbone_shift(
+        np.asarray(x), 1.5)), rtol=0, atol=1e-6)
+
+
+def test_an_adhesive_law_refuses_zero_surface_energy(capsys):
+    """gamma = 0 is Hertz's law; the adhesive laws' reduced forms divide by it (the series
+    gave NaN, DMT's backbone ZeroDivisionError): refused with the domain, not computed."""
+    for law in ("jkr", "dmt", "maugis_dugdale"):
+        assert main(["shift", "--law", law, "--x", "0.5", "--param", "gamma=0"]) == 2
+        assert "defined for gamma in (0, 10]" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------- progress display

@@ -35,6 +35,17 @@ def test_values_are_held_beyond_the_ranges(name):
     assert np.max(np.abs(mid - end)) > 1e-4
 
 
+
+@pytest.mark.parametrize("name", sorted(shape_tables.TABLES))
+def test_the_domain_ends_at_both_ends_of_the_shape_range(name):
+    """Held values are not the law's at either end: past p_hi the tables stand 2e-4 to
+    3.3e-4 from Hertz's backbone (module doc), ten times their stated errors."""
+    p_lo, p_hi = shape_backbone.shape_range(name)
+    extra = () if "q_range" not in shape_backbone.load_table(name) else (1.0,)
+    inside = [bool(shape_backbone.in_table(name, 0.5, np.exp(p), *extra))
+              for p in (p_lo - 0.1, p_lo, 0.5 * (p_lo + p_hi), p_hi, p_hi + 0.1, np.inf)]
+    assert inside == [False, True, True, True, False, False]
+
 def test_a_second_shape_coordinate_is_refused_outside_its_range_not_held():
     """Maugis-Dugdale's lam: the table has no limit to hold beyond [0.1, 100], so its
     domain (in_table) excludes those points; inside, lam changes the shape."""

@@ -164,7 +164,7 @@ def test_pieced_surrogate_reproduces_a_known_backbone():
 @pytest.mark.slow
 def test_adhesive_laws_tend_to_hertz_as_gamma_vanishes():
     """gamma -> 0: the JKR and DMT backbones tend to the Hertz backbone (exact generic path,
-    and the tables held at their r = F0/Fc = 1000 end)."""
+    and the tables held at their r = F0/Fc = 1000 end, which their domains exclude)."""
     hertz = np.asarray(backbone.backbone_shift(X, 1.5))
     gaps = {}
     for name in ("jkr", "dmt"):
@@ -178,6 +178,8 @@ def test_adhesive_laws_tend_to_hertz_as_gamma_vanishes():
         law, kw, d0 = _kw(name, young=200e9, gamma=1e-6)   # beyond the table: held at its end
         np.testing.assert_allclose(law.shift(X, rung="backbone", delta0=d0, **kw), hertz,
                                    atol=5e-3)
+        # ... 2e-4 from Hertz's (above), so outside the fast path's domain
+        assert not np.any(np.asarray(law.in_domain(X, rung="backbone", delta0=d0, **kw)))
 
 
 def test_greenwood_williamson_tends_to_hertz_as_roughness_vanishes():
