@@ -18,8 +18,8 @@ there: at the end the tables still stand 2.0e-4 (JKR, r = 1000), 3.0e-4 (DMT) an
 (Greenwood-Williamson, D0' = 1e4) from it at x = 2, ten times their stated errors, and the
 exact backbones approach it only as 1/r (JKR, DMT past contact loss) or about D0'^(-0.8)
 (measured with the generic backbone, paper's scene). For the paper's scene the end is
-gamma = 0.002 J/m^2 (JKR, DMT, 11.7 prior sd below the median) and a roughness factor
-2.2e-4 (12 sd): no prior mass a fit would miss.
+gamma = 0.0016-0.0021 J/m^2 (DMT to JKR, 11.6-12.2 prior sd below the median) and a
+roughness factor 2.1e-4 (12 sd): no prior mass a fit would miss.
 """
 
 from __future__ import annotations
