@@ -266,6 +266,34 @@ def test_an_adhesive_law_refuses_zero_surface_energy(capsys):
         assert "defined for gamma in (0, 10]" in capsys.readouterr().err
 
 
+
+def test_a_scene_without_adhesion_is_described_not_refused(tmp_path, capsys):
+    """A scene with surface_energy_J_m2 = 0 is a valid scene (Hertz's contact): `beadrod
+    scene` describes it and says that the adhesive laws are not defined at its gamma (it
+    printed JKR's stiffness and f0 as 0 and Maugis-Dugdale's overlap as NaN); the figures
+    leave those laws' nominal curves out and keep Hertz's. A gamma given by the user is
+    still refused."""
+    import jax
+
+    from models.scenes import load_scene
+    from workflows.compare_figures import theory_curves
+
+    text = Path("models/scenes/paper.toml").read_text()
+    toml = tmp_path / "smooth.toml"
+    toml.write_text(re.sub(r"(?m)^surface_energy_J_m2\s*=.*$", "surface_energy_J_m2 = 0.0",
+                           text))
+    assert main(["scene", str(toml), "--json"]) == 0
+    laws = json.loads(capsys.readouterr().out)["per_young"][0]["laws"]
+    for name in ("jkr", "dmt", "maugis_dugdale"):
+        assert "defined for gamma in (0, 10]" in laws[name]["not_defined"]
+    assert laws["hertz"]["f0_Hz"] > 0 and laws["dmt"].keys() == laws["jkr"].keys()
+    assert main(["scene", str(toml), "--param", "gamma=0"]) == 2
+    with jax.enable_x64(True):
+        curves = theory_curves(load_scene(toml), np.linspace(1e-3, 1.5, 16))
+    assert any(k.startswith("Hertz, exact backbone") for k in curves)
+    assert not any(w in k for k in curves for w in ("JKR", "DMT", "Maugis"))
+
+
 # ----------------------------------------------------------------- progress display
 
 

@@ -69,8 +69,18 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
     sc = scene_keywords(scene)
     out: dict = {}
     for law in laws():
-        theta, sources = nominal_theta(law, sc, {k: v for k, v in given.items()
-                                                 if k in law.param_names})
+        mine = {k: v for k, v in given.items() if k in law.param_names}
+        try:
+            theta, sources = nominal_theta(law, sc, mine)
+        except ValueError as exc:
+            if mine:
+                raise       # a value the user gave: refused, as by `beadrod shift`
+            # the scene's own value is outside this law's domain (a surface energy of 0:
+            # the adhesive laws are Hertz's there): the law is not defined here, the
+            # scene is (its values printed as 0 or NaN before)
+            out[law.name] = {"label": law.label, "params": {}, "sources": {},
+                             "not_defined": str(exc)}
+            continue
         st = linear_state(law, sc, theta)
         block = {"label": law.label, "params": theta, "sources": sources,
                  "delta0_m": st["delta0_m"], "K0_N_m": st["K0_N_m"], "f0_Hz": st["f0_Hz"]}

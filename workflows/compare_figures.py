@@ -47,7 +47,14 @@ def _nominal_state(law: Any, sc: dict[str, float]) -> dict[str, Any] | None:
     from models.nominal import linear_state, nominal_parameters
 
     try:
-        return linear_state(law, sc, nominal_parameters(law, sc)[0])
+        theta = nominal_parameters(law, sc)[0]
+        # a scene value outside the law's domain (a surface energy of 0): no state to draw
+        bad = [m for m in (law.param(k).problem(v) for k, v in theta.items()) if m]
+        if bad:
+            log.warning("figures: %s is not defined at the scene's nominal parameters "
+                        "(%s); its curves are left out", law.name, "; ".join(bad))
+            return None
+        return linear_state(law, sc, theta)
     except Exception as exc:  # noqa: BLE001 (a law file's law may fail anywhere)
         log.warning("figures: no nominal state of %s (%s: %s); its curves are left out",
                     law.name, type(exc).__name__, exc)
@@ -96,6 +103,12 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
                          "is left out", law.name, rung)
                 continue
             y = np.asarray(law.shift(xs, rung=rung, **state["kw"]), float)
+            inside = law.in_domain(xs, rung=rung, **state["kw"])
+            if inside is not None and not np.all(inside):
+                # the fast path holds a value that is not the law's there (a table's end)
+                log.info("figures: %s's fast path at rung %s does not cover this scene's "
+                         "nominal curve; it is left out", law.name, rung)
+                continue
             if rung == "paper_eq25" and "first_order" in ys and np.allclose(
                     y, ys["first_order"], rtol=1e-9, atol=1e-12):
                 continue  # the paper's formula is this law's first order: drawn already
