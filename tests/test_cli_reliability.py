@@ -236,9 +236,10 @@ def test_shift_outside_a_table_is_the_laws_backbone_not_the_held_value(capsys):
 
 
 @pytest.mark.parametrize("law,param", [
-    ("dmt", "gamma=1e-6"),
+    # JKR's generic backbone at one amplitude is compiled by the test above already
+    ("jkr", "gamma=1e-6"),
     # the same rule (models.shape_backbone.in_table); their generic backbones take ~20 s
-    pytest.param("jkr", "gamma=1e-6", marks=pytest.mark.slow),
+    pytest.param("dmt", "gamma=1e-6", marks=pytest.mark.slow),
     pytest.param("greenwood_williamson", "roughness_factor=0", marks=pytest.mark.slow)])
 def test_shift_past_a_tables_upper_end_is_hertz_not_the_held_value(capsys, law, param):
     """Adhesion or roughness past a table's upper end (F0/Fc > 1000, D0' > 1e4): the law
@@ -249,7 +250,7 @@ def test_shift_past_a_tables_upper_end_is_hertz_not_the_held_value(capsys, law, 
     quadrature, not the generic one's)."""
     from models.backbone import backbone_shift
 
-    x = [0.5, 1.5]
+    x = [1.5]
     assert main(["shift", "--law", law, "--method", "backbone", "--x", *map(str, x),
                  "--param", param, "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
