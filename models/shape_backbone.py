@@ -14,8 +14,8 @@ from the contact edge -6 sigma). Outside a table's range the value is held at it
 and the held value is not the law's backbone: :func:`in_table` says so (the laws'
 ``domains``; a command computes those points by the generic quadrature, a sampler counts
 none of them). That holds above p_hi too, although the laws tend to Hertz's backbone
-there: at the end the tables still stand 2.0e-4 (JKR, r = 1000), 3.0e-4 (DMT) and 3.3e-4
-(Greenwood-Williamson, D0' = 1e4) from it at x = 2, ten times their stated errors, and the
+there: at the end the tables still stand 2.0e-4 (JKR, r = 1000), 3.0e-4 (DMT) and 3.2e-4
+(Greenwood-Williamson, D0' = 1e4) from it near x = 2, ten times their stated errors, and the
 exact backbones approach it only as 1/r (JKR, DMT past contact loss) or about D0'^(-0.8)
 (measured with the generic backbone, paper's scene). For the paper's scene the end is
 gamma = 0.0016-0.0021 J/m^2 (DMT to JKR, 11.6-12.2 prior sd below the median) and a

@@ -137,7 +137,7 @@ TABLES: dict[str, ShapeTable] = {
     "greenwood_williamson": ShapeTable(
         "greenwood_williamson", _gw_kw, float(np.log(1.5)), float(np.log(1e4)),
         "D0' = delta0'/sigma > 1e4 is roughness below 1e-4 of the overlap, yet the table's end "
-        "stands 3.3e-4 from Hertz's backbone (outside the domain); D0' < 1.5 "
+        "stands 3.2e-4 from Hertz's backbone (outside the domain); D0' < 1.5 "
         "is a load carried by the summits above 4.5 sigma alone (sigma > ~10x the paper's "
         "roughness)",
         # D0 = D0' - 6 ~ -1 (D0' 4-16): the load passes from the summits' Gaussian tail to
