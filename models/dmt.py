@@ -178,6 +178,16 @@ def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike, 
     return jnp.sqrt(1.5 * (load + fc) / (mass * delta0)) / (2.0 * jnp.pi)
 
 
+HERTZ_DECAY = 1.0
+"""k [-] in the law's approach to Hertz's backbone as r = F0/Fc grows, ~ r^-k, used past
+its table's end r = 1000 (models.shape_backbone.backbone_fast). Measured with the generic
+backbone, paper's scene: in contact DMT's backbone is Hertz's (to 5e-10); past contact
+loss the departure at x = 1.5 and 2 is 2.79e-4 and 2.79e-5 at r = 1e3 and 1e4 (k = 1.00).
+Carried on from the table's end the backbone stays within 2e-7 of the generic one at
+r = 1e4 (tests/test_shape_tables.py)."""
+__all__ += ["HERTZ_DECAY"]
+
+
 def _law():
     from .backbone_table import X_MAX
     from .law import GAMMA, YOUNG, ContactLaw
@@ -205,10 +215,13 @@ def _law():
         # first order: the DMT stiffness is Hertz's, so in x = delta_a/delta0 (the DMT
         # overlap) the average is exactly the Hertz one
         shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
-                "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw))},
-        # outside the table's shape range (either end), or beyond x = 2, the held value is
-        # not this law's backbone: the inference counts no point there (shape_backbone.in_table)
-        domains={"backbone": lambda x, **kw: in_table("dmt", x, ratio(kw))},
+                "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw),
+                                                          decay=HERTZ_DECAY)},
+        # below the table's shape range, or beyond x = 2, the held value is not this law's
+        # backbone: the inference counts no point there (shape_backbone.in_table); above
+        # it the law tends to Hertz's as 1/r (HERTZ_DECAY)
+        domains={"backbone": lambda x, **kw: in_table("dmt", x, ratio(kw),
+                                                      decay=HERTZ_DECAY)},
         # relative fit time (models.law.ContactLaw.cost): two-parameter backbone table
         cost=2.0,
     )

@@ -355,6 +355,16 @@ if __name__ == "__main__":
     raise SystemExit(_main())
 
 
+HERTZ_DECAY = 0.8
+"""k [-] in the law's approach to Hertz's backbone as D0' = delta0'/sigma grows, ~ D0'^-k,
+used past its table's end D0' = 1e4 (models.shape_backbone.backbone_fast). Measured with
+the generic backbone, paper's scene (x = 2): 3.3e-4, 5.0e-5, 8.8e-6 at D0' ~ 1e4, 1e5, 1e6
+(k = 0.82, then 0.76: not a clean power; 0.8 between). Carried on from the table's end
+the backbone stays within 3e-6 of the generic one at D0' = 1e5, a tenth of the table's
+stated error (tests/test_shape_tables.py)."""
+__all__ += ["HERTZ_DECAY"]
+
+
 def _law():
     from .law import YOUNG, ContactLaw, Param, Prior
     from .shape_backbone import backbone_fast, in_table
@@ -415,11 +425,11 @@ def _law():
         overlap_from_frequency=_overlap_f0, frequency_from_overlap=_frequency,
         in_default_comparison=True,
         shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
-            "greenwood_williamson", x, reduced(delta0, kw))},
+            "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)},
         # the law holds where summits carry the load (MIN_REDUCED_OVERLAP) and the table
         # covers the point (shape_backbone.in_table); the inference counts no point outside
         domains={"backbone": lambda x, *, delta0, **kw: in_table(
-            "greenwood_williamson", x, reduced(delta0, kw))
+            "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)
             & (reduced(delta0, kw) >= MIN_REDUCED_OVERLAP)},
         # relative fit time (models.law.ContactLaw.cost): tabulated load-approach integral
         # and two-parameter backbone table

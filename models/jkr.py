@@ -50,6 +50,16 @@ __all__ = [
 ]
 
 
+HERTZ_DECAY = 1.0
+"""k [-] in the law's approach to Hertz's backbone as r = F0/Fc grows, ~ r^-k, used past
+its table's end r = 1000 (models.shape_backbone.backbone_fast). Measured with the generic
+backbone, paper's scene: the departure at x = 1.5 and 2 is 1.85e-4, 1.84e-5, 1.84e-6 at
+r = 1e3, 1e4, 1e5 (k = 1.00); below contact loss it falls faster (x = 0.9: 5.6e-6, 2.0e-7,
+6e-9), so k = 1 overstates it there by at most 4e-7. Carried on from the table's end the
+backbone stays within 4e-7 of the generic one at r = 1e4 (tests/test_shape_tables.py)."""
+__all__ += ["HERTZ_DECAY"]
+
+
 def _law():
     from .jkr_table import X_MAX, load_ratio, shift_first_order_fast
     from .law import GAMMA, YOUNG, ContactLaw
@@ -81,10 +91,13 @@ def _law():
         rungs=(*LADDER, "paper_eq25"),
         shifts={"first_order": first_order,
                 "paper_eq25": first_order,
-                "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw))},
-        # outside the table's shape range (either end), or beyond x = 2, the held value is
-        # not this law's backbone: the inference counts no point there (shape_backbone.in_table)
-        domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw))},
+                "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw),
+                                                          decay=HERTZ_DECAY)},
+        # below the table's shape range, or beyond x = 2, the held value is not this law's
+        # backbone: the inference counts no point there (shape_backbone.in_table); above
+        # it the law tends to Hertz's as 1/r (HERTZ_DECAY)
+        domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw),
+                                                      decay=HERTZ_DECAY)},
         # relative fit time (models.law.ContactLaw.cost): the implicit contact-radius
         # solve and the two-parameter backbone table made it the slowest on the embedded data
         cost=4.0,

@@ -58,6 +58,17 @@ __all__ = [
 ]
 
 
+HERTZ_DECAY = 1.0
+"""k [-] in the law's approach to Hertz's backbone as r = F0/Fc grows, ~ r^-k, used past
+its table's end r = 1000 (models.shape_backbone.backbone_fast). Measured with the generic
+backbone, paper's scene, past contact loss (x = 1.5): 1.85e-4 and 1.84e-5 at r = 1e3 and
+1e4 for lam = 3.16 (k = 1.00), 1.49e-4 and 1.45e-5 for lam = 0.1 (k = 1.01), 1.86e-4
+and 1.86e-5 for lam = 100; below
+contact loss it falls faster (lam = 0.1, x = 0.9: 1.6e-5, 7.4e-7), where k = 1 overstates
+it by at most 9e-7 at r = 1e4 (tests/test_shape_tables.py)."""
+__all__ += ["HERTZ_DECAY"]
+
+
 def _law():
     from . import maugis_dugdale_orbit as orbit
     from . import maugis_dugdale_static as static
@@ -109,11 +120,12 @@ def _law():
         # theta the state is explicit, so no root solve per force (models.maugis_dugdale_orbit)
         restoring_force=orbit.restoring_force,
         shifts={"backbone": lambda x, **kw: backbone_fast("maugis_dugdale", x, ratio(kw),
-                                                          kw["lam"])},
-        # outside the table's load ratios, outside its lam range or beyond x = 2 the held
-        # value is not this law's backbone: the inference counts no point there
+                                                          kw["lam"], decay=HERTZ_DECAY)},
+        # below the table's load ratios, outside its lam range or beyond x = 2 the held
+        # value is not this law's backbone: the inference counts no point there; above
+        # them the law tends to Hertz's as 1/r (HERTZ_DECAY)
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
-                                                      kw["lam"])},
+                                                      kw["lam"], decay=HERTZ_DECAY)},
         # a cold fit's relative wall time (35 s on the embedded data against Hertz's ~7):
         # started first. Measured one core: 48 us per NUTS step against Hertz's 13 (the
         # backbone read at every sweep point: its shape depends on two parameters, so

@@ -13,13 +13,15 @@ r = F0/Fc, Fc = 4 pi gamma R; Greenwood-Williamson D0' = delta0'/sigma (overlap 
 from the contact edge -6 sigma). Outside a table's range the value is held at its end,
 and the held value is not the law's backbone: :func:`in_table` says so (the laws'
 ``domains``; a command computes those points by the generic quadrature, a sampler counts
-none of them). That holds above p_hi too, although the laws tend to Hertz's backbone
-there: at the end the tables still stand 2.0e-4 (JKR, r = 1000), 3.0e-4 (DMT) and 3.2e-4
-(Greenwood-Williamson, D0' = 1e4) from it near x = 2, ten times their stated errors, and the
-exact backbones approach it only as 1/r (JKR, DMT past contact loss) or about D0'^(-0.8)
-(measured with the generic backbone, paper's scene). For the paper's scene the end is
-gamma = 0.0016-0.0021 J/m^2 (DMT to JKR, 11.6-12.2 prior sd below the median) and a
-roughness factor 2.1e-4 (12 sd): no prior mass a fit would miss.
+none of them). Above p_hi the laws tend to Hertz's backbone, but slowly: at the end the
+tables still stand 2.0e-4 (JKR, r = 1000), 3.0e-4 (DMT) and 3.2e-4 (Greenwood-Williamson,
+D0' = 1e4) from it near x = 2, ten times their stated errors. A law that states how it
+approaches Hertz's backbone (s^-k: ``decay``, measured with the generic backbone in the
+law's module) has its departure at the end carried on as (s_hi/s)^k, and its domain has
+no upper end (all four tabulated laws do); a law that does not has its domain end at p_hi
+(the value held there is not the law's). For the
+paper's scene the end is gamma = 0.0016-0.0021 J/m^2 (DMT to JKR, 11.6-12.2 prior sd below
+the median) and a roughness factor 2.1e-4 (12 sd).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 from jax.typing import ArrayLike
 
 from . import surrogate
+from .backbone_table import backbone_shift_fast
 
 __all__ = ["X_MAX", "TABLE_PATH", "backbone_fast", "in_table", "load_table", "shape_range"]
 
@@ -63,26 +66,39 @@ def _log(s):
 
 
 def backbone_fast(name: str, x: ArrayLike, s: ArrayLike,
-                  t: ArrayLike | None = None) -> jnp.ndarray:
+                  t: ArrayLike | None = None, *, decay: float | None = None) -> jnp.ndarray:
     """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
     law's overlap) and shape parameter s (and t, the second one, for a table that has it:
     Maugis-Dugdale's lam; s and t scalars then); x clipped to [0, X_MAX], ln s and ln t
     to the table's ranges (values held at the ends: :data:`models.shape_tables.TABLES`).
-    Differentiable, NaN-free."""
+
+    ``decay``: k > 0 for a law whose backbone tends to Hertz's as s -> inf like s^-k.
+    Above p_hi the table's departure from Hertz's backbone at its end then decays as
+    (s_hi/s)^k instead of being held (the module doc: the law's own approach, measured),
+    and :func:`in_table` has no upper end for it. Differentiable, NaN-free."""
     p_lo, p_hi = shape_range(name)
-    p = jnp.clip(_log(s), p_lo, p_hi)
+    ln_s = _log(s)
     q = None if t is None else _log(t)
-    return surrogate.evaluate(load_table(name), jnp.asarray(x, float), p, q=q)
+    x = jnp.asarray(x, float)
+    value = surrogate.evaluate(load_table(name), x, jnp.clip(ln_s, p_lo, p_hi), q=q)
+    if decay is None:
+        return value
+    hertz = backbone_shift_fast(jnp.clip(x, 0.0, X_MAX), 1.5)
+    return hertz + (value - hertz) * jnp.exp(-decay * jnp.maximum(ln_s - p_hi, 0.0))
 
 
-def in_table(name: str, x: ArrayLike, s: ArrayLike, t: ArrayLike | None = None) -> jnp.ndarray:
+def in_table(name: str, x: ArrayLike, s: ArrayLike, t: ArrayLike | None = None, *,
+             decay: float | None = None) -> jnp.ndarray:
     """True where law ``name``'s table gives its backbone: 0 <= x <= X_MAX and ln s in
-    [p_lo, p_hi] (beyond either end the held value is not the law's, the module doc); for
-    a table with a second coordinate, also ln t inside its range."""
+    [p_lo, p_hi] (beyond either end the held value is not the law's, the module doc;
+    ln s >= p_lo only, where :func:`backbone_fast` carries the law past p_hi with
+    ``decay``); for a table with a second coordinate, also ln t inside its range."""
     p_lo, p_hi = shape_range(name)
     x = jnp.asarray(x, float)
     p = _log(s)
-    ok = surrogate.within_amplitude(x, X_MAX) & (p >= p_lo - 1e-12) & (p <= p_hi + 1e-12)
+    ok = surrogate.within_amplitude(x, X_MAX) & (p >= p_lo - 1e-12)
+    if decay is None:
+        ok = ok & (p <= p_hi + 1e-12)
     table = load_table(name)
     if "q_range" in table:
         q_lo, q_hi = (float(v) for v in table["q_range"])

@@ -18,7 +18,8 @@ E* drops out of all three (the tests check the invariance). The tables are built
 of each law's force. Outside a law's p range the value is held at the end (each entry of
 :data:`TABLES` says what that means physically); x beyond X_MAX = 2 is held too. Fits
 never use a held value (below p_lo, above p_hi, beyond X_MAX): the laws' domains
-(:func:`models.shape_backbone.in_table`) give such points zero likelihood. JKR and
+(:func:`models.shape_backbone.in_table`) give such points zero likelihood, or the law
+carries its table past p_hi as it approaches Hertz's backbone (its ``HERTZ_DECAY``). JKR and
 DMT contact is taken to part at delta = 0 (where the approach branch forms it; the
 snap-off hysteresis is a loss, not a stiffness). Errors against the generic exact backbone
 (tests/test_shape_tables.py): JKR and DMT within 1e-5 in Delta f/f0 (measured 7e-6),
@@ -130,14 +131,14 @@ TABLES: dict[str, ShapeTable] = {
     "jkr": ShapeTable("jkr", lambda r: _jkr_kw(r, 3.0 * np.pi), float(np.log(0.3)),
                       float(np.log(1000.0)),
                       "r = F0/Fc > 1000 is adhesion below 0.1 % of the load, yet the table's end "
-                      "stands 2e-4 from Hertz's backbone (outside the domain); r < 0.3 is "
-                      "gamma > 7 J/m^2 for the paper's bead"),
+                      "stands 2e-4 from Hertz's backbone (carried on as 1/r: "
+                      "jkr.HERTZ_DECAY); r < 0.3 is gamma > 7 J/m^2 for the paper's bead"),
     "dmt": ShapeTable("dmt", lambda r: _jkr_kw(r, 4.0 * np.pi), float(np.log(0.3)),
                       float(np.log(1000.0)), "as for JKR, with Fc = 4 pi gamma R"),
     "greenwood_williamson": ShapeTable(
         "greenwood_williamson", _gw_kw, float(np.log(1.5)), float(np.log(1e4)),
         "D0' = delta0'/sigma > 1e4 is roughness below 1e-4 of the overlap, yet the table's end "
-        "stands 3.2e-4 from Hertz's backbone (outside the domain); D0' < 1.5 "
+        "stands 3.2e-4 from Hertz's backbone (carried on: HERTZ_DECAY); D0' < 1.5 "
         "is a load carried by the summits above 4.5 sigma alone (sigma > ~10x the paper's "
         "roughness)",
         # D0 = D0' - 6 ~ -1 (D0' 4-16): the load passes from the summits' Gaussian tail to

@@ -164,7 +164,7 @@ def test_pieced_surrogate_reproduces_a_known_backbone():
 @pytest.mark.slow
 def test_adhesive_laws_tend_to_hertz_as_gamma_vanishes():
     """gamma -> 0: the JKR and DMT backbones tend to the Hertz backbone (exact generic path,
-    and the tables held at their r = F0/Fc = 1000 end, which their domains exclude)."""
+    and the fast path past the tables' r = F0/Fc = 1000 end)."""
     hertz = np.asarray(backbone.backbone_shift(X, 1.5))
     gaps = {}
     for name in ("jkr", "dmt"):
@@ -175,12 +175,34 @@ def test_adhesive_laws_tend_to_hertz_as_gamma_vanishes():
                 generic.backbone_shift(law, X, delta0=d0, **kw)) - hertz)))
         gaps[name] = errs
         assert errs[1] < 0.05 * errs[0] and errs[1] < 1e-4, (name, errs)
-        law, kw, d0 = _kw(name, young=200e9, gamma=1e-6)   # beyond the table: held at its end
+        # beyond the table (r ~ 3e6): its departure from Hertz's at the end, carried on as
+        # (r_end/r)^HERTZ_DECAY, is ~1e-7; held, it was 2e-4
+        law, kw, d0 = _kw(name, young=200e9, gamma=1e-6)
+        assert np.all(np.asarray(law.in_domain(X, rung="backbone", delta0=d0, **kw)))
         np.testing.assert_allclose(law.shift(X, rung="backbone", delta0=d0, **kw), hertz,
-                                   atol=5e-3)
-        # ... 2e-4 from Hertz's (above), so outside the fast path's domain
-        assert not np.any(np.asarray(law.in_domain(X, rung="backbone", delta0=d0, **kw)))
+                                   rtol=0, atol=1e-6)
 
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,key,value,tol,extra", [
+    ("jkr", "gamma", 2.1e-4, 1e-6, {}),                   # r = F0/Fc ~ 1e4
+    ("dmt", "gamma", 1.6e-4, 1e-6, {}),                   # r ~ 1e4
+    ("maugis_dugdale", "gamma", 1.6e-4, 1.5e-6, {"lam": 0.1}),   # r ~ 1e4, DMT-like
+    ("greenwood_williamson", "roughness_factor", 2.1e-5, 3e-6, {})])   # D0' ~ 1e5
+def test_past_the_tables_end_the_fast_path_follows_the_generic_backbone(name, key, value, tol,
+                                                                        extra):
+    """Past a table's upper end the fast path carries the table's departure from Hertz's
+    backbone on as s^-HERTZ_DECAY (the law's module): within ``tol`` of the generic exact
+    backbone a decade past the end (the held value missed it by 2e-4 to 3e-4)."""
+    x = jnp.array([0.3, 0.9, 1.2, 1.6, 2.0])
+    law, kw, d0 = _kw(name, young=200e9, **{key: value, **extra})
+    assert np.all(np.asarray(law.in_domain(x, rung="backbone", delta0=d0, **kw)))
+    fast = np.asarray(law.shift(x, rung="backbone", delta0=d0, **kw))
+    exact = np.asarray(generic.backbone_shift(law, x, delta0=d0, **kw))
+    hertz = np.asarray(backbone.backbone_shift(x, 1.5))
+    assert np.max(np.abs(exact - hertz)) > 10 * tol       # the departure is resolved
+    np.testing.assert_allclose(fast, exact, rtol=0, atol=tol)
 
 def test_greenwood_williamson_tends_to_hertz_as_roughness_vanishes():
     hertz = np.asarray(backbone.backbone_shift(X, 1.5))
