@@ -62,10 +62,10 @@ HERTZ_DECAY = 1.0
 """k [-] in the law's approach to Hertz's backbone as r = F0/Fc grows, ~ r^-k, used past
 its table's end r = 1000 (models.shape_backbone.backbone_fast). Measured with the generic
 backbone, paper's scene, past contact loss (x = 1.5): 1.85e-4 and 1.84e-5 at r = 1e3 and
-1e4 for lam = 3.16 (k = 1.00), 1.49e-4 and 1.45e-5 for lam = 0.1 (k = 1.01), 1.86e-4
-and 1.86e-5 for lam = 100; below
-contact loss it falls faster (lam = 0.1, x = 0.9: 1.6e-5, 7.4e-7), where k = 1 overstates
-it by at most 9e-7 at r = 1e4 (tests/test_shape_tables.py)."""
+1e4 for lam = 3.16 (k = 1.00), 1.49e-4 and 1.45e-5 for lam = 0.1 (k = 1.01), 1.86e-4 and
+1.86e-5 for lam = 100 (k = 1.00); below contact loss it falls faster (lam = 0.1, x = 0.9:
+1.6e-5, 7.4e-7), where k = 1 overstates it by at most 9e-7 at r = 1e4
+(tests/test_shape_tables.py)."""
 __all__ += ["HERTZ_DECAY"]
 
 
