@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import pathlib
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.typing import ArrayLike
@@ -83,8 +84,16 @@ def backbone_fast(name: str, x: ArrayLike, s: ArrayLike,
     value = surrogate.evaluate(load_table(name), x, jnp.clip(ln_s, p_lo, p_hi), q=q)
     if decay is None:
         return value
-    hertz = backbone_shift_fast(jnp.clip(x, 0.0, X_MAX), 1.5)
-    return hertz + (value - hertz) * jnp.exp(-decay * jnp.maximum(ln_s - p_hi, 0.0))
+    over = jnp.maximum(ln_s - p_hi, 0.0)
+
+    def carried(v):
+        hertz = backbone_shift_fast(jnp.clip(x, 0.0, X_MAX), 1.5)
+        return hertz + (v - hertz) * jnp.exp(-decay * over)
+
+    # Hertz's table only where some s lies past the end: read at every sweep point of
+    # every step it cost a sampler as much as the law's own table (Maugis-Dugdale's
+    # value + gradient, one core: 33.2 -> 46.8 us); under vmap both branches run
+    return jax.lax.cond(jnp.any(over > 0.0), carried, lambda v: v, value)
 
 
 def in_table(name: str, x: ArrayLike, s: ArrayLike, t: ArrayLike | None = None, *,
