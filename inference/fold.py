@@ -50,6 +50,8 @@ import numpy as np
 
 from models.p_cells import cubic, cubic_slope, hermite
 
+from .programs import one_shot
+
 __all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter", "evaluate",
            "quantiles", "cached", "is_concrete"]
 
@@ -85,29 +87,19 @@ class Fold:
         return int(self.count.size)
 
 
-def _one_shot(fn: Callable, *example: Any) -> Callable:
-    """``fn`` compiled for arguments shaped as ``example``, without LLVM's optimisation
-    passes: for the programs that build a fold, run a few times, whose compilation is most
-    of their cost (one core: JKR's shape probe 3.9 -> 3.2 s, its probe of the cells 3.0 ->
-    2.4 s). The values differ from optimised code's by rounding only (no fused
-    multiply-adds), far below the fold's ``TOL``."""
-    lowered = jax.jit(fn).lower(*example)
-    return lowered.compile(compiler_options={"xla_backend_optimization_level": 0})
-
-
 def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> str | None:
     """The one parameter ``curve(theta)`` depends on at every draw, else None."""
     names = list(draws[0])
-    # one compiled program for every draw and parameter (a unit tangent per parameter,
-    # vmapped): run op by op, the curve's forward derivatives took 7.8 of the 11.3 s that
-    # JKR's fold cost to build (one core; now 3.2 of 6.4), and every law of a comparison
-    # is probed (Maugis-Dugdale twice: with its overlap map, then the curve alone)
+    # one program for every draw and parameter (a unit tangent per parameter, vmapped;
+    # inference.programs): run op by op, the curve's forward derivatives took 7.8 of the
+    # 11.3 s that JKR's fold cost to build (one core; now 3.2 of 6.4), and every law of a
+    # comparison is probed (Maugis-Dugdale twice: with its overlap map, then the curve)
     unit = {k: jnp.stack([jnp.full(jnp.shape(draws[0][k]), float(i == j))
                           for j in range(len(names))]) for i, k in enumerate(names)}
     derivative = jax.vmap(lambda theta, t: jax.jvp(curve, (theta,), (t,))[1],
                           in_axes=(None, 0))
     args = [{k: jnp.asarray(theta[k], float) for k in names} for theta in draws]
-    run = _one_shot(derivative, args[0], unit)
+    run = one_shot(derivative, args[0], unit)
     used: set[str] = set()
     for theta in args:
         dc = np.asarray(run(theta, unit))
@@ -139,7 +131,7 @@ def build_fold(curve: Callable[[dict], jnp.ndarray], theta: dict, param: str,
                        (jnp.ones_like(z),))
         return f, d, (jnp.asarray(True) if counted is None else counted(th))
 
-    batch = _one_shot(jax.vmap(one), jnp.zeros(_BATCH))
+    batch = one_shot(jax.vmap(one), jnp.zeros(_BATCH))
 
     def probe(z: np.ndarray):
         out = [[], [], []]

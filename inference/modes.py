@@ -38,6 +38,7 @@ from numpyro import handlers
 from numpyro.infer.util import potential_energy
 
 from .evidence import latent_site_names
+from .programs import one_shot
 from .unconstrained import flatten_unconstrained
 
 __all__ = ["ModeSearch", "find_modes"]
@@ -113,7 +114,6 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
 
     t = jnp.linspace(0.0, 1.0, _SEGMENT + 2)[1:-1]
 
-    @jax.jit
     def run(key):
         # prior draws -> unconstrained, spread about their median: all in the one program,
         # which traces the model five times instead of the eight it took with the draws
@@ -132,7 +132,10 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
         pe_all = jax.vmap(pot)(pts)
         return xs, pe_all[:starts], jnp.max(pe_all[starts:].reshape(seg.shape[:3]), axis=-1)
 
-    xs, pe, ridge = (np.asarray(a) for a in run(jax.random.PRNGKey(seed)))
+    # run once: compiled without LLVM's optimisation passes (inference.programs; JKR's
+    # search, one core, 16.3 -> 13.8 s)
+    key = jax.random.PRNGKey(seed)
+    xs, pe, ridge = (np.asarray(a) for a in one_shot(run, key)(key))
     unravel = layout[-1]
     ok = np.isfinite(pe)
     if not ok.any():
