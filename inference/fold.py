@@ -92,7 +92,7 @@ def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> 
     names = list(draws[0])
     # one program for every draw and parameter (a unit tangent per parameter, vmapped;
     # inference.programs): run op by op, the curve's forward derivatives took 7.8 of the
-    # 11.3 s that JKR's fold cost to build (one core; now 3.2 of 6.4), and every law of a
+    # 11.3 s that JKR's fold cost to build (one core; compiled once, 3.2 s), and every law of a
     # comparison is probed (Maugis-Dugdale twice: with its overlap map, then the curve)
     unit = {k: jnp.stack([jnp.full(jnp.shape(draws[0][k]), float(i == j))
                           for j in range(len(names))]) for i, k in enumerate(names)}
@@ -131,7 +131,7 @@ def build_fold(curve: Callable[[dict], jnp.ndarray], theta: dict, param: str,
                        (jnp.ones_like(z),))
         return f, d, (jnp.asarray(True) if counted is None else counted(th))
 
-    batch = one_shot(jax.vmap(one), jnp.zeros(_BATCH))
+    batch = jax.jit(jax.vmap(one))
 
     def probe(z: np.ndarray):
         out = [[], [], []]

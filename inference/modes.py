@@ -38,7 +38,6 @@ from numpyro import handlers
 from numpyro.infer.util import potential_energy
 
 from .evidence import latent_site_names
-from .programs import one_shot
 from .unconstrained import flatten_unconstrained
 
 __all__ = ["ModeSearch", "find_modes"]
@@ -114,6 +113,7 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
 
     t = jnp.linspace(0.0, 1.0, _SEGMENT + 2)[1:-1]
 
+    @jax.jit
     def run(key):
         # prior draws -> unconstrained, spread about their median: all in the one program,
         # which traces the model five times instead of the eight it took with the draws
@@ -132,10 +132,11 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
         pe_all = jax.vmap(pot)(pts)
         return xs, pe_all[:starts], jnp.max(pe_all[starts:].reshape(seg.shape[:3]), axis=-1)
 
-    # run once: compiled without LLVM's optimisation passes (inference.programs; JKR's
-    # search, one core, 16.3 -> 13.8 s)
-    key = jax.random.PRNGKey(seed)
-    xs, pe, ridge = (np.asarray(a) for a in one_shot(run, key)(key))
+    # optimised, though it runs once: compiled without LLVM's passes (inference.programs),
+    # JKR's search took 2.5 s less cold but 1.5-1.7 s more for every law when the
+    # compilation cache is warm (its 16 x 200 Adam steps run slower), which the warm
+    # comparison's margin could not pay
+    xs, pe, ridge = (np.asarray(a) for a in run(jax.random.PRNGKey(seed)))
     unravel = layout[-1]
     ok = np.isfinite(pe)
     if not ok.any():
