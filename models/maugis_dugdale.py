@@ -129,7 +129,7 @@ def _law():
         # a cold fit's relative wall time (35 s on the embedded data against Hertz's ~7):
         # started first. Measured one core: 48 us per NUTS step against Hertz's 13 (the
         # backbone read at every sweep point: its shape depends on two parameters, so
-        # inference.fold does not fold it), ESS/s 0.20 of Hertz's sampling alone
+        # inference.fold does not fold it), ESS/s 0.23 of Hertz's sampling alone (README)
         cost=5.0,
         # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
         # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2 (JKR-like),
