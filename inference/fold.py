@@ -30,7 +30,8 @@ embedded data's shift noise) is marked and never used; a sweep crossing the onse
 contact loss inside a cell (where the backbone is C1, not C2) can do that. There, and
 outside the folded range, the model evaluates the exact curve (``lax.cond`` on the scalar
 parameter: under ``vmap`` both branches run, still correct). The shape dependence is found
-numerically: the curve's forward derivative in every law parameter at two prior draws; a
+from the curve's program (the parameters whose values reach its outputs), and where two or
+more do, numerically: the curve's forward derivative in each at two prior draws; a
 parameter it does not depend on gets an exact zero. Any other case (no parameter, two or
 more, data that are not concrete, a prior without a quantile function) is not folded.
 """
@@ -47,6 +48,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.extend.core import Literal
 
 from models.p_cells import cubic, cubic_slope, hermite
 
@@ -88,23 +90,60 @@ class Fold:
 
 
 def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> str | None:
-    """The one parameter ``curve(theta)`` depends on at every draw, else None."""
+    """The one parameter ``curve(theta)`` depends on at every draw, else None.
+
+    First by data flow: a parameter that reaches no output of the curve's program has an
+    exactly zero derivative, and one that reaches it alone is the curve's parameter (a
+    curve that reaches it only through terms of zero derivative is then folded needlessly,
+    still exactly). Where two or more reach it, numerically: the curve's forward
+    derivative in each of them at every draw."""
     names = list(draws[0])
-    # one program for every draw and parameter (a unit tangent per parameter, vmapped;
+    args = [{k: jnp.asarray(theta[k], float) for k in names} for theta in draws]
+    reached = _reached(curve, args[0])
+    if reached is not None and len(reached) <= 1:
+        return reached.pop() if reached else None
+    probed = names if reached is None else [k for k in names if k in reached]
+    # one program for every draw and probed parameter (a unit tangent each, vmapped;
     # inference.programs): run op by op, the curve's forward derivatives took 7.8 of the
-    # 11.3 s that JKR's fold cost to build (one core; compiled once, 3.2 s), and every law of a
-    # comparison is probed (Maugis-Dugdale twice: with its overlap map, then the curve)
-    unit = {k: jnp.stack([jnp.full(jnp.shape(draws[0][k]), float(i == j))
-                          for j in range(len(names))]) for i, k in enumerate(names)}
+    # 11.3 s that JKR's fold cost to build (one core; compiled once, 3.2 s)
+    unit = {k: jnp.stack([jnp.full(jnp.shape(args[0][k]), float(k == j)) for j in probed])
+            for k in names}
     derivative = jax.vmap(lambda theta, t: jax.jvp(curve, (theta,), (t,))[1],
                           in_axes=(None, 0))
-    args = [{k: jnp.asarray(theta[k], float) for k in names} for theta in draws]
     run = one_shot(derivative, args[0], unit)
     used: set[str] = set()
     for theta in args:
         dc = np.asarray(run(theta, unit))
-        used.update(k for j, k in enumerate(names) if np.any(dc[j] != 0.0))
+        used.update(k for j, k in enumerate(probed) if np.any(dc[j] != 0.0))
     return used.pop() if len(used) == 1 else None
+
+
+def _reached(curve: Callable[[dict], jnp.ndarray], theta: dict) -> set[str] | None:
+    # the parameters whose values flow into the outputs of curve's jaxpr (an equation's
+    # outputs depend on all its inputs: nested programs are taken whole, which can only
+    # add parameters); None where the curve cannot be traced so (then every parameter is
+    # probed). Tracing costs milliseconds where the numerical probe compiles for seconds
+    names = list(theta)
+    try:
+        closed = jax.make_jaxpr(lambda *v: curve(dict(zip(names, v))))(
+            *[theta[k] for k in names])
+    except Exception:   # noqa: BLE001 - any tracing failure: probe numerically instead
+        return None
+    jaxpr = closed.jaxpr
+    deps: dict[Any, set[str]] = {v: {k} for v, k in zip(jaxpr.invars, names)}
+
+    def of(atoms) -> set[str]:
+        out: set[str] = set()
+        for v in atoms:
+            if not isinstance(v, Literal):
+                out |= deps.get(v, set())
+        return out
+
+    for eqn in jaxpr.eqns:
+        reached = of(eqn.invars)
+        for v in eqn.outvars:
+            deps[v] = reached
+    return of(jaxpr.outvars)
 
 
 _BATCH = 512   # parameter values per probe call: one compiled shape for every call
