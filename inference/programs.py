@@ -1,6 +1,7 @@
 """Programs compiled for a few calls: without LLVM's optimisation passes.
 
-Why. A program that runs once or twice (the fold's shape probe, :mod:`inference.fold`)
+Why. A program that runs once or twice (the fold's numerical shape probe,
+:func:`inference.fold.shape_parameter`, where the curve's program leaves it open)
 costs its compilation, and XLA's CPU backend spends most of a compilation in LLVM's
 optimisation passes. Compiled without them (``xla_backend_optimization_level = 0``) it
 compiles faster and runs slower (one core: JKR's shape probe 3.9 -> 3.2 s). The values

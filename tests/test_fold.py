@@ -108,10 +108,17 @@ def test_shape_parameter_sees_every_dependence():
     one = lambda th: th["a"] * x**2 + 0.0 * th["b"]  # noqa: E731
     two = lambda th: th["a"] * x**2 + th["b"] * x  # noqa: E731
     none = lambda th: x**2  # noqa: E731
+    only = lambda th: th["a"] * x**2  # noqa: E731
+    # a dependence that shows at the second draw only
+    later = lambda th: th["a"] * x**2 + jnp.where(th["b"] > 1.0, th["b"] - 1.0, 0.0) * x  # noqa: E731
     draws = [{"a": jnp.asarray(1.3), "b": jnp.asarray(0.7)}]
-    assert F.shape_parameter(one, draws) == "a"
+    assert F.shape_parameter(one, draws) == "a"      # b reaches it with a zero derivative
     assert F.shape_parameter(two, draws) is None
-    assert F.shape_parameter(none, draws) is None
+    assert F.shape_parameter(none, draws) is None     # decided from the program
+    assert F.shape_parameter(only, draws) == "a"      # decided from the program
+    assert F.shape_parameter(later, draws) == "a"
+    assert F.shape_parameter(later, draws + [{"a": jnp.asarray(1.3),
+                                              "b": jnp.asarray(1.4)}]) is None
 
 
 def test_a_kink_is_refined_or_left_to_the_exact_curve():
