@@ -20,7 +20,7 @@ from typing import Any
 
 from .law import ContactLaw, prior_median
 
-__all__ = ["nominal_parameters", "linear_state"]
+__all__ = ["nominal_parameters", "checked_parameters", "linear_state"]
 
 
 def nominal_parameters(law: ContactLaw, scene: Mapping[str, float],
@@ -41,6 +41,20 @@ def nominal_parameters(law: ContactLaw, scene: Mapping[str, float],
             theta[p.name], sources[p.name] = float(scene[key]), f"scene ({key})"
         else:
             theta[p.name], sources[p.name] = prior_median(p.prior), "prior median"
+    return theta, sources
+
+
+def checked_parameters(law: ContactLaw, scene: Mapping[str, float],
+                       given: Mapping[str, float] | None = None
+                       ) -> tuple[dict[str, float], dict[str, str]]:
+    """:func:`nominal_parameters`, each value checked against its parameter's domain and
+    physical bounds (:meth:`models.law.Param.problem`); ValueError naming the law and the
+    problem (a scene's surface energy of 0 for an adhesive law, a value given by hand)."""
+    theta, sources = nominal_parameters(law, scene, given)
+    for name, value in theta.items():
+        problem = law.param(name).problem(value)
+        if problem is not None:
+            raise ValueError(f"law '{law.name}': {problem}")
     return theta, sources
 
 

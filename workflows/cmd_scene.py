@@ -61,17 +61,17 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
     scene's value, else the prior median; ``sources`` says which): static overlap, tangent
     stiffness and linear resonance under the load, and the linear Q where the law has a
     loss channel."""
-    from models.nominal import linear_state
+    from models.nominal import checked_parameters, linear_state
     from models.registry import laws
 
-    from .cmd_shift import nominal_theta, scene_keywords
+    from .cmd_shift import scene_keywords
 
     sc = scene_keywords(scene)
     out: dict = {}
     for law in laws():
         mine = {k: v for k, v in given.items() if k in law.param_names}
         try:
-            theta, sources = nominal_theta(law, sc, mine)
+            theta, sources = checked_parameters(law, sc, mine)
         except ValueError as exc:
             if mine:
                 raise       # a value the user gave: refused, as by `beadrod shift`

@@ -32,7 +32,7 @@ from models.rungs import RUNGS
 from . import lawfiles
 
 __all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
-           "METHODS", "scene_keywords", "nominal_theta", "parse_params"]
+           "METHODS", "scene_keywords", "parse_params"]
 
 X_MAX = 2.0
 """Largest x = delta_a/delta0 computed (models.backbone_table.X_MAX: the tables end there)."""
@@ -107,17 +107,6 @@ def scene_keywords(scene: Any) -> dict[str, float]:
     return out
 
 
-def nominal_theta(law: Any, sc: dict[str, float], given: dict[str, float] | None = None
-                  ) -> tuple[dict[str, float], dict[str, str]]:
-    """The law's parameters and where each comes from (models.nominal.nominal_parameters:
-    given, else the scene's value, else the prior median), each checked by
-    :func:`check_param`."""
-    from models.nominal import nominal_parameters
-
-    theta, source = nominal_parameters(law, sc, given)
-    return {k: check_param(law, k, v) for k, v in theta.items()}, source
-
-
 def parse_params(items: Sequence[str] | None) -> dict[str, float]:
     """``KEY=VALUE`` strings as a dict of floats; ValueError naming a malformed item."""
     out: dict[str, float] = {}
@@ -146,7 +135,7 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     import numpy as np
 
     from models.law import SCENE_KEYS
-    from models.nominal import linear_state
+    from models.nominal import checked_parameters, linear_state
     from models.registry import get_law
     from models.scenes import builtin_scene, load_scene
 
@@ -175,7 +164,7 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     rung = check_method(contact, method)
     sc = scene_keywords(scene)
     sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
-    theta, sources = nominal_theta(contact, sc, {k: v for k, v in given.items()
+    theta, sources = checked_parameters(contact, sc, {k: v for k, v in given.items()
                                                  if k in contact.param_names})
     state = linear_state(contact, sc, theta)
     kw, d0 = state["kw"], state["delta0_m"]

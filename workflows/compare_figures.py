@@ -44,14 +44,12 @@ def figure_laws(names: Any = ()) -> list[Any]:
 def _nominal_state(law: Any, sc: dict[str, float]) -> dict[str, Any] | None:
     """The law's linear state at its nominal parameters (models.nominal), None (and a
     warning) where it cannot be computed, so that one law does not cost every figure."""
-    from models.nominal import linear_state
-
-    from .cmd_shift import nominal_theta
+    from models.nominal import checked_parameters, linear_state
 
     try:
-        # checked as `beadrod shift` checks them: a scene value outside the law's domain
-        # (a surface energy of 0) is a ValueError, and no state to draw
-        return linear_state(law, sc, nominal_theta(law, sc)[0])
+        # a scene value outside the law's domain (a surface energy of 0) is a ValueError,
+        # and no state to draw
+        return linear_state(law, sc, checked_parameters(law, sc)[0])
     except Exception as exc:  # noqa: BLE001 (a law file's law may fail anywhere)
         log.warning("figures: no nominal state of %s (%s: %s); its curves are left out",
                     law.name, type(exc).__name__, exc)
