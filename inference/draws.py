@@ -23,6 +23,7 @@ import numpy as np
 from numpyro import handlers
 
 from .likelihood import OBSERVED_DATA_KEYS, OBSERVED_SITES
+from .residual_fold import POINTWISE
 
 __all__ = ["fit_draws", "sample_stats", "observed_data", "BATCH"]
 
@@ -70,9 +71,13 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
         tr = _trace(model, pdata, None, key)
         return {k: tr[k]["value"] for k in latents}
 
+    # the point-wise likelihood needs the curve at every sweep: a model whose sweeps'
+    # likelihood is folded (inference.residual_fold) evaluates it for this trace
+    data_pw = {**data, POINTWISE: True}
+
     def one(args):
         values, key = args
-        tr = _trace(model, data, values, None)
+        tr = _trace(model, data_pw, values, None)
         out = {f"ll:{k}": tr[k]["fn"].log_prob(tr[k]["value"])
                for k in OBSERVED_SITES if k in tr}
         if predictive:

@@ -54,8 +54,8 @@ from models.p_cells import cubic, cubic_slope, hermite
 
 from .programs import one_shot
 
-__all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter", "evaluate",
-           "quantiles", "cached", "is_concrete"]
+__all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter",
+           "shape_parameters", "evaluate", "quantiles", "cached", "is_concrete"]
 
 CELLS = 256
 """Cells along z = ln theta over the folded range."""
@@ -90,7 +90,14 @@ class Fold:
 
 
 def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> str | None:
-    """The one parameter ``curve(theta)`` depends on at every draw, else None.
+    """The one parameter ``curve(theta)`` depends on at every draw, else None
+    (:func:`shape_parameters`)."""
+    names = shape_parameters(curve, draws)
+    return names[0] if len(names) == 1 else None
+
+
+def shape_parameters(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> tuple[str, ...]:
+    """The parameters ``curve(theta)`` depends on at some draw, in the draws' key order.
 
     First by data flow: a parameter that reaches no output of the curve's program has an
     exactly zero derivative, and one that reaches it alone is the curve's parameter (a
@@ -101,7 +108,7 @@ def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> 
     args = [{k: jnp.asarray(theta[k], float) for k in names} for theta in draws]
     reached = _reached(curve, args[0])
     if reached is not None and len(reached) <= 1:
-        return reached.pop() if reached else None
+        return tuple(k for k in names if k in reached)
     probed = names if reached is None else [k for k in names if k in reached]
     # one program for every draw and probed parameter (a unit tangent each, vmapped;
     # inference.programs): run op by op, the curve's forward derivatives took 7.8 of the
@@ -115,7 +122,7 @@ def shape_parameter(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) -> 
     for theta in args:
         dc = np.asarray(run(theta, unit))
         used.update(k for j, k in enumerate(probed) if np.any(dc[j] != 0.0))
-    return used.pop() if len(used) == 1 else None
+    return tuple(k for k in names if k in used)
 
 
 def _reached(curve: Callable[[dict], jnp.ndarray], theta: dict) -> set[str] | None:

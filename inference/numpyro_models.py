@@ -62,6 +62,12 @@ checked where it is built; elsewhere the exact curve). Where the f0 -> delta0 ma
 Jacobian depend on the same one parameter (all four), they are folded with the curve
 (:mod:`inference.steps`). The likelihood is unchanged to that tolerance; one NUTS step of
 these laws costs 9-11 us on one core against Hertz's 7 (24-34 us without the fold).
+Where the curve depends on two parameters (Maugis-Dugdale: gamma and lambda) and the
+sweeps' likelihood is Normal, that likelihood is folded instead: it reads the curve
+through two residual sums, tabulated in the two parameters over the region the data leave
+plausible (:mod:`inference.residual_fold`: within 1e-3 nat of the exact log-likelihood
+where used, checked where built; elsewhere exact). The point-wise likelihood (LOO) and
+the predictive draws evaluate the curve exactly (``data[POINTWISE]``).
 
 The law-free ``baseline``: Delta f/f0 = -amp * xs^power with xs = delta_a omega0_p^2 / g
 (the overlap scale g/omega0^2 of a linear spring; any other scale is absorbed into amp),
@@ -85,10 +91,17 @@ from models import hertz
 from models.law import RungUnavailable, sampler_site
 from models.registry import FIT_RUNGS, get_law, law_names
 
-from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
+from .baseline import (
+    baseline_curve,
+    baseline_model,
+    nuisance_q,
+    observe_drive,
+    observe_drive_folded,
+)
 from .likelihood import observe_logq
 from .overlap import MeasuredF0, invert_log_overlap, log_overlap
 from .priors import law_prior, prior
+from .residual_fold import POINTWISE, ResidualFold, sums
 from .steps import StepFold, SweepCurve, step_fold
 
 __all__ = ["LAWS", "RUNGS", "BASELINE", "ModelSpec", "ForwardModelUnavailable",
@@ -232,11 +245,16 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
     numpyro.deterministic("f0_pred", invert_log_overlap(law.name, log_ref, kw))
     observed = data.get("f0")
     folded: dict[str, Any] = {}
+    residual: ResidualFold | None = None
     steps = None
     if observed is not None and (spec.fold or spec.use_shift):
         steps = SweepCurve(law, spec, data, observed)
         fold = step_fold(steps, data) if spec.fold else None
-        folded = {} if fold is None else fold.values(steps, theta)
+        if isinstance(fold, ResidualFold):
+            # the sweeps' likelihood folded (point-wise, the model evaluates the curve)
+            residual = None if data.get(POINTWISE) else fold
+        else:
+            folded = {} if fold is None else fold.values(steps, theta)
     known = (observed, folded["log_delta0"], folded["log_slope"]) if "log_slope" in folded \
         else None
     if spec.use_f0:
@@ -262,7 +280,10 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
             # a point gets zero likelihood rather than a silently wrong one (the prior
             # is in effect truncated to the domain; log Z counts only the mass inside)
             numpyro.factor("law_domain", jnp.where(inside, 0.0, -jnp.inf))
-        observe_drive(spec, curve, data)
+        if residual is None:
+            observe_drive(spec, curve, data)
+        else:
+            observe_drive_folded(spec, curve, data, sums(residual, theta, steps.residual_sums))
     if spec.use_q:
         if law.predicts_q:
             sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))

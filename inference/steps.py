@@ -13,7 +13,9 @@ map with the curve matters for the adhesive laws: their f0 -> delta0 map (the im
 then the contact radius of the JKR or DMT state) cost as much per step as the folded curve.
 Where the overlap map depends on more parameters than the curve (a user's law), the curve
 alone is folded and the map evaluated exactly; where the curve does not depend on exactly
-one parameter, nothing is.
+one parameter, the curve is not folded; where it depends on two and the sweeps'
+likelihood is Normal, that likelihood's residual sums are (:mod:`inference.residual_fold`,
+:meth:`SweepCurve.residual_sums`).
 """
 
 from __future__ import annotations
@@ -26,13 +28,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from .fold import TAIL as FOLD_TAIL
-from .fold import Fold, build_fold, cached, is_concrete, quantiles, shape_parameter
+from .fold import Fold, build_fold, cached, is_concrete, quantiles, shape_parameters
 from .fold import evaluate as fold_eval
 from .likelihood import SWEEP_LAYOUT_KEYS, sweep_layout
 from .overlap import log_overlap, log_overlap_and_slope
 from .priors import law_prior
+from .residual_fold import ResidualFold, build_residual_fold
 
-__all__ = ["SweepCurve", "StepFold", "step_fold"]
+__all__ = ["SweepCurve", "StepFold", "step_fold", "ResidualFold"]
 
 
 class SweepCurve:
@@ -83,6 +86,12 @@ class SweepCurve:
         parts = [self.of_theta(theta)] if self.spec.use_shift else []
         return jnp.concatenate([*parts, self.protocols(theta)])
 
+    def residual_sums(self, theta: dict):
+        """(S0, S1) = (sum_i r_i^2, sum_i d_i r_i), r_i = y_i - f_i, of the observed shifts
+        y and directions d (:mod:`inference.residual_fold`)."""
+        r = jnp.asarray(self.data["shift"]) - self.of_theta(theta)
+        return jnp.stack([jnp.sum(r * r), jnp.sum(jnp.asarray(self.data["direction"]) * r)])
+
     def counted(self, theta: dict):
         """True where theta puts every sweep inside the law's domain (else the model gives
         zero likelihood, whatever the curve)."""
@@ -111,10 +120,11 @@ class StepFold:
         return got
 
 
-def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | None:
+def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
     """The fold of the step's quantities for concrete data: with the overlap map where it
-    depends on the curve's one parameter, else of the curve alone; None where neither
-    folds (see the module doc)."""
+    depends on the curve's one parameter, else of the curve alone; where the curve depends
+    on two parameters and the sweeps' likelihood is Normal, of that likelihood's residual
+    sums (:mod:`inference.residual_fold`); None where none folds (see the module doc)."""
     law, spec = sweeps.law, sweeps.spec
     leaves = [sweeps.f0, sweeps.position, *jax.tree_util.tree_leaves(data)]
     if not law.params or not is_concrete(*leaves):
@@ -123,6 +133,7 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | None:
     if spec.use_shift and not fits_curve:
         return None                      # the generic quadrature is not folded
     priors = {p.name: law_prior(p, spec.overrides) for p in law.params}
+    observed = data.get("shift") is not None and spec.likelihood == "normal"
 
     def make():
         with jax.ensure_compile_time_eval():
@@ -137,18 +148,30 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | None:
             for fn, with_protocols in ((sweeps.everything, True), (sweeps.of_theta, False)):
                 if not (with_protocols or spec.use_shift):
                     break
-                name = shape_parameter(fn, draws)
-                if name is None:
+                names = shape_parameters(fn, draws)
+                if len(names) == 2 and not with_protocols and observed:
+                    d = np.asarray(data["direction"], float)
+                    pair = names
+                    return build_residual_fold(
+                        sweeps.residual_sums, draws[0], names,
+                        tuple(tuple(float(v) for v in q[k][2:]) for k in names),
+                        sweeps.counted,
+                        lambda th, pair=pair: sum(priors[k].log_prob(th[k]) for k in pair),
+                        int(d.size), float(np.sum(d * d)))
+                if len(names) != 1:
                     continue
-                lo, hi = (float(v) for v in q[name][2:])
-                fold = build_fold(fn, draws[0], name, lo, hi, counted=counted)
+                lo, hi = (float(v) for v in q[names[0]][2:])
+                fold = build_fold(fn, draws[0], names[0], lo, hi, counted=counted)
                 if fold is not None:
                     return StepFold(fold, with_protocols)
             return None
 
     key = (law.name, spec.rung, spec.use_shift, repr(law.params),
            repr(sorted(spec.overrides.items())), repr(sorted(data["scene"].items())),
-           np.asarray(sweeps.f0), np.asarray(data["amplitude"]), np.asarray(sweeps.position))
+           spec.likelihood, np.asarray(sweeps.f0), np.asarray(data["amplitude"]),
+           np.asarray(sweeps.position),
+           None if data.get("shift") is None else np.asarray(data["shift"]),
+           np.asarray(data["direction"]))
     return cached(key, make)
 
 

@@ -1,0 +1,140 @@
+"""The residual fold (inference.residual_fold) of Maugis-Dugdale's sweep likelihood, whose
+curve depends on two parameters: its sums, log-likelihood and derivatives against the
+exact ones, its fallback, the model's log density with and without it, and the
+point-wise likelihood that LOO reads."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from numpyro import handlers
+from numpyro.infer.util import log_density
+
+from inference import residual_fold as R
+from inference.likelihood import model_inputs
+from inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
+from inference.priors import law_prior
+from models.registry import get_law
+from workflows.config import DEFAULTS
+from workflows.pipeline import load_data
+
+LAW = "maugis_dugdale"
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    return model_inputs(load_data(DEFAULTS))
+
+
+@pytest.fixture(scope="module")
+def folded(inputs):
+    law = get_law(LAW)
+    sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
+    fold = step_fold(sweeps, inputs)
+    assert isinstance(fold, R.ResidualFold)
+    assert fold.params == ("gamma", "lam")
+    base = {p.name: law_prior(p, {}).icdf(jnp.asarray(0.5)) for p in law.params}
+    return sweeps, fold, base
+
+
+def _points(fold, rng, n):
+    # n points of the folded box: (z_a, z_b) and whether their cell is usable
+    cells = np.array(fold.cells)
+    pos = rng.uniform(0.0, 1.0, (n, 2)) * cells
+    z = np.asarray(fold.z_lo) + pos * np.asarray(fold.width)
+    ij = pos.astype(int)
+    return z, fold.usable[ij[:, 0], ij[:, 1]]
+
+
+def test_folded_log_likelihood_within_its_bound(folded, inputs):
+    """At random points of usable cells the folded log-likelihood differs from the exact
+    one by at most TOL at noise sigma_ref and offsets within offset_span of offset_ref,
+    what the fold promises; outside its box the exact sums themselves."""
+    sweeps, fold, base = folded
+    assert fold.usable.mean() > 0.5 and fold.max_error <= R.TOL
+
+    def both(z):
+        theta = {**base, "gamma": jnp.exp(z[0]), "lam": jnp.exp(z[1])}
+        return R.sums(fold, theta, sweeps.residual_sums), sweeps.residual_sums(theta)
+
+    z, usable = _points(fold, np.random.default_rng(7), 120)
+    # below the box in gamma (a larger load ratio, inside the law's domain)
+    outside = np.array([[fold.z_lo[0] - 0.3, 0.5], [fold.z_lo[0] - 0.6, 1.5]])
+    got, want = (np.asarray(a) for a in jax.jit(jax.vmap(both))(jnp.asarray(
+        np.concatenate([z, outside]))))
+    d = np.asarray(inputs["direction"])
+    n, d2 = d.size, float(np.sum(d * d))
+    for o in (fold.offset_ref - fold.offset_span, fold.offset_ref,
+              fold.offset_ref + fold.offset_span):
+        miss = np.abs(np.asarray(R.log_likelihood(got[:-2].T, o, fold.sigma_ref, n, d2))
+                      - np.asarray(R.log_likelihood(want[:-2].T, o, fold.sigma_ref, n, d2)))
+        assert np.all(miss[usable] <= R.TOL), np.max(miss[usable])
+    assert np.allclose(got[-2:], want[-2:], rtol=1e-12, atol=0)
+
+
+def test_folded_gradient_matches_the_exact_one(folded):
+    """The fold's derivative (a rule of its own) in forward and reverse mode alike, and
+    against the exact sums' where the cell is usable."""
+    sweeps, fold, base = folded
+    z, usable = _points(fold, np.random.default_rng(11), 12)
+
+    def s(zz):
+        return R.sums(fold, {**base, "gamma": jnp.exp(zz[0]), "lam": jnp.exp(zz[1])},
+                      sweeps.residual_sums)
+
+    fwd = np.asarray(jax.jit(jax.vmap(jax.jacfwd(s)))(jnp.asarray(z)))
+    rev = np.asarray(jax.jit(jax.vmap(jax.jacrev(s)))(jnp.asarray(z)))
+    ref = np.asarray(jax.jit(jax.vmap(jax.jacfwd(lambda zz: sweeps.residual_sums(
+        {**base, "gamma": jnp.exp(zz[0]), "lam": jnp.exp(zz[1])}))))(jnp.asarray(z)))
+    # (NaN where lambda lies outside its domain, in the box's margin: both alike)
+    assert np.allclose(fwd, rev, rtol=1e-10, atol=1e-14, equal_nan=True)
+    scale = np.max(np.abs(ref), axis=(1, 2), keepdims=True)
+    assert np.all(np.abs(fwd - ref)[usable] <= 1e-3 * scale[usable])
+
+
+def test_folded_model_has_the_exact_log_density(folded, inputs):
+    """The model's log joint with and without the fold at points of usable cells (noise
+    and offset as the fold's bound states them): within TOL."""
+    _, fold, _ = folded
+    with_fold = build_model(ModelSpec(law=LAW, rung="backbone"))
+    exact = build_model(ModelSpec(law=LAW, rung="backbone", fold=False))
+    z, usable = _points(fold, np.random.default_rng(13), 40)
+    z = z[usable][:12]
+    dens = [jax.jit(lambda p, m=m: log_density(m, (inputs,), {}, p)[0])
+            for m in (with_fold, exact)]
+    compared = 0
+    for za, zb in z:
+        params = {"young": 2e11, "gamma": float(np.exp(za)), "lam": float(np.exp(zb)),
+                  "delta0_scatter": 0.1, "sigma_shift": fold.sigma_ref,
+                  "offset_down": fold.offset_ref, "mu_logq": np.log(50.0), "tau_logq": 0.5}
+        params = get_law(LAW).sampler_values(params)
+        a, b = (float(d(params)) for d in dens)
+        assert np.isfinite(a) == np.isfinite(b)
+        if np.isfinite(b):
+            compared += 1
+            assert abs(a - b) <= R.TOL
+    assert compared >= 10
+
+
+def test_pointwise_likelihood_is_the_exact_one(inputs):
+    """A model whose sweep likelihood is folded still gives LOO its per-sweep
+    log-likelihood, when asked (data[POINTWISE]): the exact sites sum to the folded
+    factor within TOL at a point of the fold."""
+    model = build_model(ModelSpec(law=LAW, rung="backbone"))
+    values = get_law(LAW).sampler_values({"young": 2e11, "gamma": 0.03, "lam": 2.0})
+    values.update(delta0_scatter=0.1, sigma_shift=0.0137, offset_down=0.0)
+
+    def trace(data):
+        sub = handlers.substitute(handlers.seed(model, 0), data=values)
+        return handlers.trace(sub).get_trace(data)
+
+    folded = trace(inputs)
+    pointwise = trace({**inputs, R.POINTWISE: True})
+    assert "shift_obs" not in folded and "shift_obs_folded" in folded
+    assert "shift_obs" in pointwise and "shift_obs_folded" not in pointwise
+    site = pointwise["shift_obs"]
+    total = float(jnp.sum(site["fn"].log_prob(site["value"])))
+    factor = folded["shift_obs_folded"]
+    assert abs(total - float(factor["fn"].log_prob(factor["value"]))) <= R.TOL
