@@ -37,8 +37,8 @@ from .variables import SAMPLE_STATS, SITE_DIMS, VARIABLES
 # starts differ, far less than any basin the mode search separates
 _INIT_JITTER = 0.02
 
-__all__ = ["configure", "FitResult", "run_nuts", "nuts_kernel", "draw_cost", "idata_coords",
-           "describe", "EXTRA_FIELDS"]
+__all__ = ["configure", "FitResult", "run_nuts", "nuts_kernel", "draw_program", "draw_cost",
+           "idata_coords", "describe", "EXTRA_FIELDS"]
 
 # everything arviz turns into sample_stats: lp (from potential_energy), step_size,
 # n_steps and tree_depth (from num_steps), acceptance_rate, diverging, energy
@@ -162,12 +162,13 @@ def _extend(mcmc: MCMC, data: dict[str, Any], samples: dict, extra: dict,
     return samples, extra, done
 
 
-def draw_cost(model: Callable, data: dict[str, Any], *, init_params: dict | None = None,
-              num_warmup: int = 200, num_draws: int = 200, seed: int = 0,
-              repeats: int = 3) -> tuple[float, float]:
-    """(seconds per post-warmup draw, leapfrog steps per draw) of one NUTS chain of
-    :func:`nuts_kernel`, its ``num_draws`` draws one compiled loop timed after a call to
-    compile (best of ``repeats``).
+def draw_program(model: Callable, data: dict[str, Any], *, init_params: dict | None = None,
+                 num_warmup: int = 200, num_draws: int = 200,
+                 seed: int = 0) -> tuple[Callable[[], float], float]:
+    """(run, leapfrog steps per draw): ``run()`` runs one NUTS chain's ``num_draws``
+    post-warmup draws of :func:`nuts_kernel` as one compiled loop (compiled here) and
+    returns its wall time [s]. :func:`draw_cost` times it; a benchmark that compares laws
+    times theirs in turns (machines here drift by tens of percent within minutes).
 
     Why not the NUTS run's wall time: it holds the compilation, whose noise (tenths of a
     second) can exceed a fast law's whole sampling. Why not a gradient timed call by call
@@ -193,12 +194,23 @@ def draw_cost(model: Callable, data: dict[str, Any], *, init_params: dict | None
         return jax.lax.scan(body, state, None, length=num_draws)
 
     _, steps = jax.block_until_ready(draws(state))
-    best = float("inf")
-    for _ in range(repeats):
+
+    def run() -> float:
         t0 = time.perf_counter()
         jax.block_until_ready(draws(state))
-        best = min(best, time.perf_counter() - t0)
-    return best / num_draws, float(np.mean(np.asarray(steps)))
+        return time.perf_counter() - t0
+
+    return run, float(np.mean(np.asarray(steps)))
+
+
+def draw_cost(model: Callable, data: dict[str, Any], *, init_params: dict | None = None,
+              num_warmup: int = 200, num_draws: int = 200, seed: int = 0,
+              repeats: int = 3) -> tuple[float, float]:
+    """(seconds per post-warmup draw, leapfrog steps per draw) of one NUTS chain: the
+    :func:`draw_program` loop timed after a call to compile (best of ``repeats``)."""
+    run, steps = draw_program(model, data, init_params=init_params, num_warmup=num_warmup,
+                              num_draws=num_draws, seed=seed)
+    return min(run() for _ in range(repeats)) / num_draws, steps
 
 
 def run_nuts(

@@ -133,7 +133,8 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
     if spec.use_shift and not fits_curve:
         return None                      # the generic quadrature is not folded
     priors = {p.name: law_prior(p, spec.overrides) for p in law.params}
-    observed = data.get("shift") is not None and spec.likelihood == "normal"
+    observed = (data.get("shift") is not None and data.get("direction") is not None
+                and spec.likelihood == "normal")
 
     def make():
         with jax.ensure_compile_time_eval():
@@ -171,7 +172,7 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
            spec.likelihood, np.asarray(sweeps.f0), np.asarray(data["amplitude"]),
            np.asarray(sweeps.position),
            None if data.get("shift") is None else np.asarray(data["shift"]),
-           np.asarray(data["direction"]))
+           None if data.get("direction") is None else np.asarray(data["direction"]))
     return cached(key, make)
 
 

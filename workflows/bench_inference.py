@@ -7,8 +7,10 @@ parameters, ESS per second of sampling, and the evidence by both estimators
 with its wall time. Because a fast law's sampling can take less time than the noise of its
 compile probe, sampling is also measured without the probe: ESS per second of sampling
 work, the draws' leapfrog steps times the cost of one step inside NUTS, timed on a
-compiled one-chain loop of post-warmup draws (:func:`inference.sample.draw_cost`); the
-laws are compared with Hertz both ways.
+compiled one-chain loop of post-warmup draws (:func:`inference.sample.draw_program`),
+every model's loop timed in turns after all the fits (best of three rounds), so that the
+machine's drift over the run does not enter the ratios; the laws are compared with Hertz
+both ways.
 
 The baseline is what a physicist would write without this project: the same
 Hertz posterior (first-order shift, per-protocol overlap conditioned on the
@@ -32,6 +34,7 @@ from ._io import write_text
 __all__ = ["run", "baseline_log_density", "timed_nuts", "results_markdown"]
 
 _G = 9.80665
+_ROUNDS = 3   # rounds of the step-cost loops, every model once a round
 
 
 def _paper_eq23(x: float) -> float:
@@ -194,7 +197,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     from inference.bridge import bridge_sampling_log_z
     from inference.likelihood import model_inputs
     from inference.numpyro_models import ModelSpec, build_model
-    from inference.sample import draw_cost
+    from inference.sample import draw_program
 
     from .comparison import JOBS
     from .config import DEFAULTS, merge
@@ -219,6 +222,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     t_ns_wall = time.perf_counter() - t0
     specs["hertz_first_order"] = ModelSpec(law="hertz", rung="first_order")
     t_bridge = 0.0
+    loops: dict[str, tuple] = {}
     for name, spec in specs.items():
         model = build_model(spec)
         fit, compile_s, sampling, ess = timed_nuts(model, inputs, chains, warm, draws)
@@ -228,23 +232,35 @@ def run(out_dir: Path, quick: bool = False) -> Path:
             br = bridge_sampling_log_z(model, {"data": inputs}, fit.idata)
             t_bridge += br.wall_s
         init = None if fit.modes is None else fit.modes.best
-        draw_s, draw_steps = draw_cost(model, inputs, init_params=init, num_warmup=warm // 2,
-                                       num_draws=draws // 2)
-        step_s = draw_s / draw_steps
+        loops[name] = draw_program(model, inputs, init_params=init, num_warmup=warm // 2,
+                                   num_draws=draws // 2)
         steps = np.asarray(fit.idata.sample_stats["n_steps"])
         grads = float(np.sum(steps))
         rows.append({"model": name, "rung": spec.rung, "compile_s": compile_s,
                      "mode_search_s": fit.timings.get("mode_search_s"),
                      "sampling_s": sampling, "min_bulk_ess": ess, "ess_per_s": ess / sampling,
                      "ess_per_s_incl_compile": ess / fit.timings["nuts_s"],
-                     "us_per_step": 1e6 * step_s,
+                     "us_per_step": None,          # timed below, all models in turns
                      "gradients_per_draw": grads / steps.size,
-                     "ess_per_step_s": ess / (grads * step_s),
+                     "ess_per_step_s": None,
                      "log_z_ns": ns.log_z if ns else None, "err_ns": ns.log_z_err if ns else None,
                      "ns_s": ns.wall_s if ns else None,
                      "log_z_bridge": br.log_z if br else None,
                      "err_bridge": br.log_z_err if br else None,
                      "bridge_s": br.wall_s if br else None})
+    # the step costs timed in turns, every model's loop once a round, best of ROUNDS:
+    # timed right after each fit, minutes apart, they took this machine's drift with them
+    # (Hertz's step 9.3 us in one run, 13-14 us within the hour)
+    best = {k: float("inf") for k in loops}
+    for _ in range(_ROUNDS):
+        for k, (run_loop, _) in loops.items():
+            best[k] = min(best[k], run_loop())
+    for r in rows:
+        if r["model"] in loops:
+            step_s = best[r["model"]] / (draws // 2) / loops[r["model"]][1]
+            grads = r["gradients_per_draw"] * chains * draws
+            r["us_per_step"] = 1e6 * step_s
+            r["ess_per_step_s"] = r["min_bulk_ess"] / (grads * step_s)
     # the baseline, on the same posterior as hertz_first_order
     d = _numpy_inputs(inputs)
     spread = _check_same_posterior(build_model(specs["hertz_first_order"]), inputs, d,
