@@ -132,12 +132,14 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
     fits_curve = spec.rung in law.shifts
     if spec.use_shift and not fits_curve:
         return None                      # the generic quadrature is not folded
-    priors = {p.name: law_prior(p, spec.overrides) for p in law.params}
     observed = (data.get("shift") is not None and data.get("direction") is not None
                 and spec.likelihood == "normal")
 
     def make():
         with jax.ensure_compile_time_eval():
+            # built here: a distribution built under a trace holds traced parameters (a
+            # LogUniform its log bounds), whose quantiles could not give a range
+            priors = {p.name: law_prior(p, spec.overrides) for p in law.params}
             q = {k: quantiles(d, (0.37, 0.71, FOLD_TAIL, 1.0 - FOLD_TAIL))
                  for k, d in priors.items()}
             if any(v is None for v in q.values()):

@@ -138,3 +138,62 @@ def test_pointwise_likelihood_is_the_exact_one(inputs):
     total = float(jnp.sum(site["fn"].log_prob(site["value"])))
     factor = folded["shift_obs_folded"]
     assert abs(total - float(factor["fn"].log_prob(factor["value"]))) <= R.TOL
+
+
+def test_fold_of_a_kinked_toy_curve_keeps_its_bound():
+    """Any two-parameter curve, not only a law's: sweeps whose curve turns at a corner
+    (C1, as a backbone at contact loss) that moves with both parameters. The fold finds
+    the plausible region (around the truth), keeps its promised bound at random points of
+    usable cells, and is the exact sums elsewhere."""
+    rng = np.random.default_rng(3)
+    x = np.sort(rng.uniform(0.05, 1.5, 300))
+    d = np.where(rng.uniform(size=x.size) < 0.5, 1.0, 0.0)
+
+    def curve(a, b):
+        # -a x^2 below the corner x = b, its tangent line above it
+        return jnp.where(x < b, -a * x * x, -a * (2.0 * b * x - b * b))
+
+    y = np.asarray(curve(0.04, 0.9)) + 0.002 * d + rng.normal(0.0, 1e-3, x.size)
+
+    def exact(theta):
+        r = y - curve(theta["a"], theta["b"])
+        return jnp.stack([jnp.sum(r * r), jnp.sum(d * r)])
+
+    fold = R.build_residual_fold(
+        exact, {"a": 0.04, "b": 0.9}, ("a", "b"), ((0.01, 0.2), (0.3, 3.0)),
+        lambda th: jnp.asarray(True), lambda th: -jnp.log(th["a"]) - jnp.log(th["b"]),
+        x.size, float(np.sum(d * d)))
+    assert fold is not None and fold.usable.mean() > 0.5
+    lo = np.asarray(fold.z_lo)
+    hi = lo + np.asarray(fold.width) * np.array(fold.cells)
+    assert lo[0] < np.log(0.04) < hi[0] and lo[1] < np.log(0.9) < hi[1]
+    z, usable = _points(fold, np.random.default_rng(4), 400)
+    sums = jax.jit(jax.vmap(lambda zz: (R.sums(fold, {"a": jnp.exp(zz[0]), "b": jnp.exp(zz[1])},
+                                               exact),
+                                        exact({"a": jnp.exp(zz[0]), "b": jnp.exp(zz[1])}))))
+    got, want = (np.asarray(v) for v in sums(jnp.asarray(z)))
+    for o in (fold.offset_ref - fold.offset_span, fold.offset_ref + fold.offset_span):
+        miss = np.abs(np.asarray(R.log_likelihood(got.T, o, fold.sigma_ref, x.size, np.sum(d)))
+                      - np.asarray(R.log_likelihood(want.T, o, fold.sigma_ref, x.size,
+                                                    np.sum(d))))
+        assert np.all(miss[usable] <= R.TOL)
+    assert np.array_equal(got[~usable], want[~usable])
+
+
+def test_fold_is_built_under_a_trace(inputs):
+    """A model is first traced inside a compiled program (the mode search): the fold must
+    be built there too. lambda's LogUniform prior, built under the trace, held traced log
+    bounds, whose quantiles gave no range, and the fold was silently skipped."""
+    from inference import fold as F
+
+    law = get_law(LAW)
+    F._CACHE.clear()
+    got = []
+
+    def traced(x):
+        sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
+        got.append(step_fold(sweeps, inputs))
+        return x
+
+    jax.jit(traced)(jnp.zeros(()))
+    assert isinstance(got[0], R.ResidualFold)
