@@ -126,10 +126,11 @@ def _law():
         # them the law tends to Hertz's as 1/r (HERTZ_DECAY)
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                       kw["lam"], decay=HERTZ_DECAY)},
-        # a cold fit's relative wall time (35 s on the embedded data against Hertz's ~7):
-        # started first. Measured one core: 48 us per NUTS step against Hertz's 13 (the
-        # backbone read at every sweep point: its shape depends on two parameters, so
-        # inference.fold does not fold it), ESS/s 0.23 of Hertz's sampling alone (README)
+        # a cold fit's relative wall time (61 s in the default comparison against Hertz's
+        # 21): started first. Its curve depends on two parameters, so inference.fold does
+        # not fold it; its sweeps' likelihood is folded instead (inference.residual_fold,
+        # built in the mode search): a NUTS step 22.6 us against Hertz's 9.6, one core,
+        # 36.3 unfolded; ESS/s 0.45-0.67 of Hertz's sampling alone (README)
         cost=5.0,
         # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
         # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2 (JKR-like),

@@ -30,9 +30,23 @@ def inputs():
 
 @pytest.fixture(scope="module")
 def folded(inputs):
+    """The fold, built as a fit builds it: inside a compiled program's trace (the mode
+    search's, which a fit traces first). There lambda's LogUniform prior, built under the
+    trace, held traced log bounds, whose quantiles gave no range, and the fold was
+    silently skipped in every fit."""
+    from inference import fold as F
+
     law = get_law(LAW)
     sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
-    fold = step_fold(sweeps, inputs)
+    F._CACHE.clear()
+    got = []
+
+    def traced(x):
+        got.append(step_fold(sweeps, inputs))
+        return x
+
+    jax.jit(traced)(jnp.zeros(()))
+    fold = got[0]
     assert isinstance(fold, R.ResidualFold)
     assert fold.params == ("gamma", "lam")
     base = {p.name: law_prior(p, {}).icdf(jnp.asarray(0.5)) for p in law.params}
@@ -179,21 +193,3 @@ def test_fold_of_a_kinked_toy_curve_keeps_its_bound():
         assert np.all(miss[usable] <= R.TOL)
     assert np.array_equal(got[~usable], want[~usable])
 
-
-def test_fold_is_built_under_a_trace(inputs):
-    """A model is first traced inside a compiled program (the mode search): the fold must
-    be built there too. lambda's LogUniform prior, built under the trace, held traced log
-    bounds, whose quantiles gave no range, and the fold was silently skipped."""
-    from inference import fold as F
-
-    law = get_law(LAW)
-    F._CACHE.clear()
-    got = []
-
-    def traced(x):
-        sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
-        got.append(step_fold(sweeps, inputs))
-        return x
-
-    jax.jit(traced)(jnp.zeros(()))
-    assert isinstance(got[0], R.ResidualFold)
