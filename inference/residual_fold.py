@@ -15,9 +15,11 @@ d_i the direction),
 so the whole log-likelihood, -(S0 - 2 o S1 + o^2 D)/(2 sigma^2) - N ln sigma
 - (N/2) ln 2 pi, reads the curve through two numbers. S0 and S1 are folded: bicubic
 Hermite pieces in (z_a, z_b) = (ln theta_a, ln theta_b) on ``CELLS`` x ``CELLS`` equal
-cells over the priors' central 1 - 2e-12, from the exact values and first and mixed
-derivatives at the nodes (nested forward derivatives of the exact curve). A step reads one
-cell: 32 numbers, whatever the number of sweeps.
+cells over the region the data leave plausible (``COARSE``, ``REGION``: a coarse grid of
+the profile log-likelihood with the log prior, inside the priors' central 1 - 2e-12
+widened by half on each side, as a posterior pushed by strong data can lie beyond it),
+from the nodes' exact values and their first and mixed derivatives by fourth-order
+differences. A step reads one cell: 32 numbers, whatever the number of sweeps.
 
 Accuracy, in the unit that matters: the log-likelihood. An error (dS0, dS1) shifts it by
 (dS0 - 2 o dS1)/(2 sigma^2). Where a sweep crosses the onset of contact loss inside a
