@@ -23,8 +23,7 @@ from .likelihood import observe_logq, observe_shift
 from .priors import prior
 from .residual_fold import log_likelihood as residual_log_likelihood
 
-__all__ = ["baseline_curve", "baseline_model", "observe_drive", "observe_drive_folded",
-           "nuisance_q",
+__all__ = ["baseline_curve", "baseline_model", "observe_drive", "nuisance_q",
            "reference_scale", "PIVOT_POWER", "BASELINE_PARAMS"]
 
 BASELINE_PARAMS = ("amp", "power")
@@ -46,21 +45,20 @@ def nuisance_q(spec: Any, data: dict) -> None:
                  df=spec.student_df)
 
 
-def observe_drive(spec: Any, curve: jnp.ndarray, data: dict) -> None:
-    """shift_obs ~ Normal|StudentT(curve + offset_down * direction, sigma_shift)."""
+def observe_drive(spec: Any, curve: jnp.ndarray, data: dict,
+                  sums: jnp.ndarray | None = None) -> None:
+    """shift_obs ~ Normal|StudentT(curve + offset_down * direction, sigma_shift). With
+    ``sums``, the residual sums (S0, S1) of a Normal likelihood's curve
+    (:mod:`inference.residual_fold`): the same log density as one factor
+    ('shift_obs_folded') instead of a site per sweep; ``curve`` then enters only the
+    deterministic 'shift_pred'."""
     offset = numpyro.sample("offset_down", prior("offset_down", spec.overrides))
     sigma = numpyro.sample("sigma_shift", prior("sigma_shift", spec.overrides))
     pred = numpyro.deterministic("shift_pred", curve + offset * data["direction"])
-    observe_shift(pred, sigma, data["shift"], likelihood=spec.likelihood, df=spec.student_df)
-
-
-def observe_drive_folded(spec: Any, curve: jnp.ndarray, data: dict, sums: jnp.ndarray) -> None:
-    """:func:`observe_drive` (Normal) from the residual sums (S0, S1) of the curve
-    (:mod:`inference.residual_fold`): the same log density, one factor ('shift_obs_folded')
-    instead of a site per sweep; ``curve`` enters only the deterministic 'shift_pred'."""
-    offset = numpyro.sample("offset_down", prior("offset_down", spec.overrides))
-    sigma = numpyro.sample("sigma_shift", prior("sigma_shift", spec.overrides))
-    numpyro.deterministic("shift_pred", curve + offset * data["direction"])
+    if sums is None:
+        observe_shift(pred, sigma, data["shift"], likelihood=spec.likelihood,
+                      df=spec.student_df)
+        return
     d = jnp.asarray(data["direction"], float)
     numpyro.factor("shift_obs_folded", residual_log_likelihood(
         sums, offset, sigma, int(d.shape[0]), jnp.sum(d * d)))

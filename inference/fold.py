@@ -52,6 +52,7 @@ from jax.extend.core import Literal
 
 from models.p_cells import cubic, cubic_slope, hermite
 
+from .chosen import chosen
 from .programs import one_shot
 
 __all__ = ["CELLS", "TOL", "TAIL", "REFINE", "Fold", "build_fold", "shape_parameter",
@@ -236,7 +237,7 @@ def evaluate(fold: Fold, theta: dict, exact: Callable[[dict], jnp.ndarray]) -> j
     ``exact`` but get no derivative, as the fold presumes (:func:`shape_parameter`)."""
     z = jnp.log(jnp.asarray(theta[fold.param], float))
     others = {k: v for k, v in theta.items() if k != fold.param}
-    return _evaluate(fold, exact, z, others)
+    return chosen(partial(_value, fold, exact), z, others)
 
 
 def _locate(fold: Fold, z):
@@ -272,21 +273,6 @@ def _value(fold, exact, z, others, slope: bool):
 
     # under vmap lax.cond runs both branches (still correct); NUTS takes one
     return jax.lax.cond(use, folded, direct, z, others)
-
-
-@partial(jax.custom_jvp, nondiff_argnums=(0, 1))
-def _evaluate(fold, exact, z, others):
-    return _value(fold, exact, z, others, slope=False)
-
-
-@_evaluate.defjvp
-def _evaluate_jvp(fold, exact, primals, tangents):
-    # Why a custom rule: differentiating through lax.cond makes the forward pass carry
-    # the residuals of both branches (the exact curve's many intermediates, zeros when
-    # the fold is taken); here the cond returns the value and its z-slope, nothing else.
-    z, others = primals
-    value, slope = _value(fold, exact, z, others, slope=True)
-    return value, slope * tangents[0]
 
 
 _CACHE: OrderedDict[str, Fold | None] = OrderedDict()

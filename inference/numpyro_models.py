@@ -91,13 +91,7 @@ from models import hertz
 from models.law import RungUnavailable, sampler_site
 from models.registry import FIT_RUNGS, get_law, law_names
 
-from .baseline import (
-    baseline_curve,
-    baseline_model,
-    nuisance_q,
-    observe_drive,
-    observe_drive_folded,
-)
+from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
 from .likelihood import observe_logq
 from .overlap import MeasuredF0, invert_log_overlap, log_overlap
 from .priors import law_prior, prior
@@ -280,10 +274,8 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
             # a point gets zero likelihood rather than a silently wrong one (the prior
             # is in effect truncated to the domain; log Z counts only the mass inside)
             numpyro.factor("law_domain", jnp.where(inside, 0.0, -jnp.inf))
-        if residual is None:
-            observe_drive(spec, curve, data)
-        else:
-            observe_drive_folded(spec, curve, data, sums(residual, theta, steps.residual_sums))
+        observe_drive(spec, curve, data, None if residual is None
+                      else sums(residual, theta, steps.residual_sums))
     if spec.use_q:
         if law.predicts_q:
             sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))

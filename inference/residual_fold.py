@@ -51,6 +51,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .chosen import chosen
+
 __all__ = ["CELLS", "COARSE", "REGION", "TOL", "POINTWISE", "ResidualFold",
            "build_residual_fold", "sums", "log_likelihood"]
 
@@ -247,7 +249,7 @@ def sums(fold: ResidualFold, theta: dict, exact: Callable[[dict], jnp.ndarray]) 
     curve does not depend on them)."""
     z = jnp.log(jnp.stack([jnp.asarray(theta[k], float) for k in fold.params]))
     others = {k: v for k, v in theta.items() if k not in fold.params}
-    return _sums(fold, exact, z, others)
+    return chosen(partial(_value, fold, exact), z, others)
 
 
 def _value(fold, exact, z, others, slope: bool):
@@ -277,20 +279,6 @@ def _value(fold, exact, z, others, slope: bool):
 
     # under vmap lax.cond runs both branches (still correct); NUTS takes one
     return jax.lax.cond(use, folded, direct, z, others)
-
-
-@partial(jax.custom_jvp, nondiff_argnums=(0, 1))
-def _sums(fold, exact, z, others):
-    return _value(fold, exact, z, others, slope=False)
-
-
-@_sums.defjvp
-def _sums_jvp(fold, exact, primals, tangents):
-    # as inference.fold: the cond returns the value and its Jacobian, nothing else (its
-    # residuals would otherwise carry the exact curve's intermediates every step)
-    z, others = primals
-    value, jac = _value(fold, exact, z, others, slope=True)
-    return value, jac @ tangents[0]
 
 
 def log_likelihood(s: jnp.ndarray, offset, sigma, n_points: int, d2: float) -> jnp.ndarray:

@@ -35,7 +35,7 @@ from .overlap import log_overlap, log_overlap_and_slope
 from .priors import law_prior
 from .residual_fold import ResidualFold, build_residual_fold
 
-__all__ = ["SweepCurve", "StepFold", "step_fold", "ResidualFold"]
+__all__ = ["SweepCurve", "StepFold", "step_fold"]
 
 
 class SweepCurve:
