@@ -39,7 +39,10 @@ class CurveFit:
     width (NaN when a half-power crossing lies outside the sweep); ``f_low``,
     ``f_high`` [Hz] the crossings; ``asymmetry`` = (right - left half-width) /
     full width; ``asymmetric`` whether -3 dB Q should not be trusted;
-    ``note`` says why, when something is off.
+    ``note`` says why, when something is off. ``peak_at_edge``: the largest amplitude is
+    the sweep's first or last point, so the resonance lies outside the sweep (``f_res``
+    is then that edge, not a resonance); ``grid_maximum``: the local fit failed inside the
+    sweep and ``f_res`` is the grid maximum.
     """
 
     f_res: float
@@ -50,6 +53,8 @@ class CurveFit:
     asymmetry: float
     asymmetric: bool
     note: str = ""
+    peak_at_edge: bool = False
+    grid_maximum: bool = False
 
 
 def _crossing(f: np.ndarray, a: np.ndarray, i_peak: int, level: float, step: int) -> float:
@@ -86,6 +91,7 @@ def extract_resonance(
     if f.ndim != 1 or f.shape != a.shape or len(f) < MIN_CURVE_POINTS:
         raise ValueError(f"need two 1-D arrays of equal length >= {MIN_CURVE_POINTS}")
     k = int(np.argmax(a))
+    edge = k in (0, len(a) - 1)
     lo, hi = k, k
     while lo > 0 and a[lo - 1] >= window * a[k]:
         lo -= 1
@@ -110,9 +116,14 @@ def extract_resonance(
         f_res = float(f[k] + u_v * scale)
         y_min = float(np.polyval(coef, u_v))
         a_peak = float(1.0 / math.sqrt(y_min)) if y_min > 0 else float(a[k])
+        grid = False
     else:
         f_res, a_peak = float(f[k]), float(a[k])
-        note = "local fit failed (peak at the sweep edge or flat); grid maximum used"
+        grid = True
+        note = "local fit failed (no smooth peak about the grid maximum); grid maximum used"
+    if edge:
+        note = (f"largest amplitude at the sweep's edge ({f[k]:.6g} Hz): no resonance peak "
+                "inside the sweep")
     level = a_peak / math.sqrt(2.0)
     f_low = _crossing(f, a, k, level, -1)
     f_high = _crossing(f, a, k, level, +1)
@@ -120,14 +131,16 @@ def extract_resonance(
         side = "low" if math.isnan(f_low) else "high"
         return CurveFit(f_res, a_peak, math.nan, f_low, f_high, math.nan, True,
                         (note + "; " if note else "")
-                        + f"no -3 dB crossing on the {side}-frequency side within the sweep")
+                        + f"no -3 dB crossing on the {side}-frequency side within the sweep",
+                        edge, grid and not edge)
     width = f_high - f_low
     asym = ((f_high - f_res) - (f_res - f_low)) / width
     asymmetric = abs(asym) > asymmetry_tol
     if asymmetric:
         note = (note + "; " if note else "") + (
             f"half-widths differ by {abs(asym):.0%} of the -3 dB width: Q not trustworthy")
-    return CurveFit(f_res, a_peak, f_res / width, f_low, f_high, float(asym), asymmetric, note)
+    return CurveFit(f_res, a_peak, f_res / width, f_low, f_high, float(asym), asymmetric, note,
+                    edge, grid and not edge)
 
 
 def read_curve(path: Path, *, label: str | None = None) -> pd.DataFrame:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import hashlib
 import io
 import json
 import math
@@ -31,7 +32,41 @@ import pandas as pd
 from .schema import DataError
 
 __all__ = ["atomic_path", "write_text", "write_bytes", "write_json", "CsvTable",
-           "read_csv_table"]
+           "read_csv_table", "MANIFEST_ENV", "record_written", "file_sha256"]
+
+# The manifest of the output folder being written (workflows.outdir sets it for a run; a
+# spawned worker process inherits it, so files its workers write are listed too).
+MANIFEST_ENV = "BEADROD_MANIFEST"
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """The SHA-256 of a file's bytes, as hex."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def record_written(target: str | os.PathLike, *, digest: bool = True) -> None:
+    """List ``target`` in the manifest named by ``$BEADROD_MANIFEST`` when it lies in that
+    manifest's folder: one JSON line (path relative to the folder, SHA-256 of the content
+    or null for a file that grows, such as the log), appended in one write, so that
+    processes writing into one folder side by side never tear each other's lines."""
+    manifest = os.environ.get(MANIFEST_ENV)
+    if not manifest:
+        return
+    root = os.path.dirname(manifest)
+    path = os.path.abspath(target)
+    if os.path.commonpath([root, path]) != root or path == manifest:
+        return
+    line = json.dumps({"path": os.path.relpath(path, root),
+                       "sha256": file_sha256(path) if digest else None}) + "\n"
+    fd = os.open(manifest, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+    try:
+        os.write(fd, line.encode("utf-8"))
+    finally:
+        os.close(fd)
 
 
 @contextlib.contextmanager
@@ -55,6 +90,7 @@ def atomic_path(target: str | os.PathLike, suffix: str | None = None) -> Iterato
     try:
         yield tmp_path
         os.replace(tmp_path, target)
+        record_written(target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()

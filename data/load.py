@@ -4,6 +4,14 @@ A dataset folder holds ``measurements.csv`` (see :mod:`data.schema`),
 ``scene.toml`` (the simulator's scene format, :mod:`models.scenes`), optionally
 ``truth.json`` (synthetic worlds) and the raw sweep curves that the ``curve``
 column points to (paths relative to the folder).
+
+Loading checks the folder as a whole: each curve's amplitudes against the plausibility
+bounds before its peak is fitted; a curve whose largest amplitude is at the sweep's edge
+(no resonance inside the sweep) is refused; a curve whose -3 dB Q is not trustworthy
+(an asymmetric peak) gives its row no Q (flagged in the table's ``q_untrusted`` column,
+counted by :mod:`data.process`); the measured linear resonance is compared with what
+the scene implies (:mod:`data.scene_check`: a unit slip in ``scene.toml``); and
+``truth.json`` must have the shape the summary and the report read.
 """
 
 from __future__ import annotations
@@ -18,15 +26,20 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from models.tomlfile import describe_value
+
 from .extract import extract_resonance, read_curve
 from .io import read_csv_table, write_bytes, write_json, write_text
 from .limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
+from .scene_check import check_scene_units
 from .schema import DataError, canonical_csv, curve_path, validate_table, where
 
 __all__ = [
     "Dataset",
     "load_dataset",
     "load_scene_file",
+    "load_truth",
+    "check_truth",
     "scene_limits",
     "dataset_hash",
     "dump_toml",
@@ -46,7 +59,9 @@ class Dataset:
     """A validated dataset: the typed table (sorted by protocol, step, direction,
     with ``row`` = 1-based data row, ``line`` = its line in the file as an editor
     numbers it, and curve-extracted values filled in),
-    the scene, its dict, the optional truth, and a content hash."""
+    the scene, its dict, the optional truth, and a content hash. ``curve_notes``: every
+    remark on the curves (``beadrod validate`` prints them); ``csv_name``: the name of
+    the measurement file, for messages."""
 
     path: Path
     table: pd.DataFrame
@@ -55,6 +70,7 @@ class Dataset:
     truth: dict | None
     data_hash: str
     curve_notes: tuple[str, ...] = field(default=())
+    csv_name: str = MEASUREMENTS
 
 
 def scene_limits(scene: Any) -> Limits:
@@ -107,6 +123,8 @@ def _apply_curves(table: pd.DataFrame, folder: Path, file: str, limits: Limits) 
     against the same limits as table cells; return notes (fit caveats, replaced cells)."""
     notes: list[str] = []
     table["curve_asymmetric"] = False
+    table["q_untrusted"] = False  # a curve's -3 dB Q not trustworthy: the row has no Q
+    table["curve_grid_maximum"] = False  # the peak fit failed: f_res is the grid maximum
     for i in np.flatnonzero((table["curve"].astype(str) != "").to_numpy()):
         rel = str(table.at[i, "curve"])
         line = int(table.at[i, "line"])
@@ -116,9 +134,27 @@ def _apply_curves(table: pd.DataFrame, folder: Path, file: str, limits: Limits) 
         except ValueError as exc:
             raise DataError(f"{place}: {exc}") from None
         curve = read_curve(p, label=f"{rel} (the curve of {file}, line {line})")
-        fit = extract_resonance(curve["frequency_Hz"].to_numpy(), curve["amplitude_m"].to_numpy())
+        freq, amp = curve["frequency_Hz"].to_numpy(), curve["amplitude_m"].to_numpy()
+        # the peak's plausibility before the fit: 1/A^2 of an absurd amplitude (1e-300 m)
+        # overflows and the fit would fail with a numerical error instead of this message
+        if (problem := check_value("amplitude_m", float(amp.max()), limits)) is not None:
+            raise DataError(f"{place}: largest amplitude_m in {rel}: {problem}")
+        try:
+            fit = extract_resonance(freq, amp)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise DataError(f"{place}: no resonance could be read from {rel} "
+                            f"({type(exc).__name__})") from None
+        if fit.peak_at_edge:
+            raise DataError(f"{place}: {rel} has its largest amplitude at the sweep's edge "
+                            f"({fit.f_res:.6g} Hz): no resonance peak inside the sweep, so "
+                            "no f_res to read (sweep a wider band, or remove the row)")
+        # the curve is the sweep's raw record: a Q it shows to be unreliable is not used,
+        # nor the table's cell, which (by the format) was read from it
+        q_untrusted = bool(fit.asymmetric and not math.isnan(fit.q))
+        if q_untrusted:
+            table.at[i, "q_factor"] = math.nan
         for col, v in (("f_res_Hz", fit.f_res), ("amplitude_m", fit.amplitude),
-                       ("q_factor", fit.q)):
+                       ("q_factor", math.nan if q_untrusted else fit.q)):
             if math.isnan(v):  # no -3 dB Q: the table's Q (if any) stays, fit.note says why
                 continue
             if (problem := check_value(col, v, limits)) is not None:
@@ -129,8 +165,11 @@ def _apply_curves(table: pd.DataFrame, folder: Path, file: str, limits: Limits) 
                              f"by {v:.6g} extracted from {rel}")
             table.at[i, col] = v
         table.at[i, "curve_asymmetric"] = bool(fit.asymmetric)
+        table.at[i, "q_untrusted"] = q_untrusted
+        table.at[i, "curve_grid_maximum"] = bool(fit.grid_maximum)
         if fit.note:
-            notes.append(f"{file} line {line} ({rel}): {fit.note}")
+            used = "; its Q is not used" if q_untrusted else ""
+            notes.append(f"{file} line {line} ({rel}): {fit.note}{used}")
     return notes
 
 
@@ -151,18 +190,78 @@ def load_dataset(path: str | Path) -> Dataset:
     table = validate_table(raw.frame(), file=csv.name, limits=limits, lines=raw.lines,
                            header_line=raw.header_line)
     notes = _apply_curves(table, folder, csv.name, limits)
-    truth = None
-    if (folder / TRUTH).exists():
-        try:
-            truth = json.loads((folder / TRUTH).read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
-            raise DataError(f"{folder / TRUTH}, line {exc.lineno}, column {exc.colno}: "
-                            f"invalid JSON ({exc.msg})") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise DataError(f"{folder / TRUTH}: cannot read as UTF-8 JSON "
-                            f"({type(exc).__name__})") from None
+    check_scene_units(scene, table, scene_file=folder / SCENE, csv_name=csv.name)
+    truth = load_truth(folder / TRUTH) if (folder / TRUTH).exists() else None
     return Dataset(folder, table, scene, scene_dict, truth,
-                   dataset_hash(canonical_csv(table), scene_dict), tuple(notes))
+                   dataset_hash(canonical_csv(table), scene_dict), tuple(notes), csv.name)
+
+
+_TRUTH_TEXT = ("world", "kind", "model", "generator", "shift_law")
+"""truth.json keys that, where present, are text."""
+_TRUTH_TABLES = ("parameters", "protocols", "observables")
+"""truth.json keys that, where present, are objects."""
+_TRUTH_PROTOCOL_NUMBERS = ("delta0_m", "f0_reference_Hz", "f0_linear_Hz", "q", "q_reference")
+"""Per-protocol truth.json values the report reads (positive numbers or null)."""
+
+
+def _json_kind(v: Any) -> str:
+    return {dict: "an object", list: "an array", str: "a string", bool: "a boolean",
+            type(None): "null", int: "a number", float: "a number"}.get(type(v), "a value")
+
+
+def _positive_number(v: Any) -> bool:
+    try:
+        return (isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0)
+    except OverflowError:  # a JSON integer beyond the float range
+        return False
+
+
+def check_truth(truth: Any, file: str | Path) -> None:
+    """Refuse a ``truth.json`` whose shape the validation summary or the report cannot
+    read: a :class:`DataError` naming the file and the key."""
+    if not isinstance(truth, dict):
+        raise DataError(f"{file}: must hold a JSON object (key -> value), got "
+                        f"{_json_kind(truth)}")
+    for key in _TRUTH_TEXT:
+        if key in truth and not isinstance(truth[key], str):
+            raise DataError(f"{file}: key '{key}' must be a string, got {_json_kind(truth[key])}")
+    seed = truth.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+        raise DataError(f"{file}: key 'seed' must be an integer, got {_json_kind(seed)}")
+    for key in _TRUTH_TABLES:
+        if key in truth and not isinstance(truth[key], dict):
+            raise DataError(f"{file}: key '{key}' must be an object, got "
+                            f"{_json_kind(truth[key])}")
+    eta = (truth.get("parameters") or {}).get("eta_Pa_s")
+    if eta is not None and not _positive_number(eta):
+        raise DataError(f"{file}: key 'parameters' -> 'eta_Pa_s' must be a positive number, "
+                        f"got {_json_kind(eta)}")
+    for pid, values in (truth.get("protocols") or {}).items():
+        if not isinstance(values, dict):
+            raise DataError(f"{file}: key 'protocols' -> {describe_value(pid)} must be an "
+                            f"object, got {_json_kind(values)}")
+        for key in _TRUTH_PROTOCOL_NUMBERS:
+            v = values.get(key)
+            if v is not None and not _positive_number(v):
+                raise DataError(f"{file}: key 'protocols' -> {describe_value(pid)} -> '{key}' "
+                                f"must be a positive number or null, got {_json_kind(v)}")
+
+
+def load_truth(path: Path) -> dict:
+    """``truth.json`` read and checked (:func:`check_truth`); DataError naming the file."""
+    try:
+        truth = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise DataError(f"{path}, line {exc.lineno}, column {exc.colno}: "
+                        f"invalid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise DataError(f"{path}: its arrays or objects are nested too deeply to read") \
+            from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: cannot read as UTF-8 JSON ({type(exc).__name__})") from None
+    check_truth(truth, path)
+    return truth
 
 
 def _toml_value(v: Any) -> str:

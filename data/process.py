@@ -13,7 +13,11 @@ Per protocol (Merkel et al. 2019, Sec. 2 and Fig. 1(d)):
   first reference. For a linear response delta is proportional to Q V, so
   Eq. 31 reads 1/Q - 1/Q_ref.
 
-Where a reference step holds both sweep directions their values are averaged.
+Where a reference step holds both sweep directions their values are averaged. A
+protocol whose first reference has no usable Q (an empty or NaN cell, or a curve whose
+-3 dB Q is not trustworthy) has Q_ref = NaN: its Q is left out of the likelihood, and
+``warnings`` says how many (the fit logs them, the report shows the count). A dataset
+with no drive sweep left to fit (all excluded by the 2 % rule) is refused.
 The amplitude axis delta_a/delta0 takes delta0 from the Hertz law under the
 scene's load (the paper's convention) or from each protocol's measured f0.
 """
@@ -27,7 +31,8 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
-from .load import Dataset, load_dataset
+from .load import MEASUREMENTS, Dataset, load_dataset
+from .schema import DataError
 
 __all__ = [
     "ProcessedDataset",
@@ -69,6 +74,10 @@ class ProcessedDataset:
     ``excluded`` lists the excluded drive rows with a ``reason``; ``references``
     every reference step with f0(n) and its relative drift from f0. ``notes`` say
     which cells the protocol leaves unused (nothing is dropped silently).
+    ``n_q_untrusted``: protocols whose first reference has no Q because its curve's
+    -3 dB Q is not trustworthy (counted in :attr:`n_q_missing` too). ``warnings``: what a
+    fit must tell the user about the data (protocols without Q, curve caveats), one line
+    each.
     """
 
     protocol_ids: tuple[str, ...]
@@ -93,10 +102,17 @@ class ProcessedDataset:
     options: dict = field(default_factory=dict)
     truth: dict | None = None  # truth.json of a synthetic world, else None
     notes: tuple[str, ...] = ()  # table content the protocol does not use, and why
+    n_q_untrusted: int = 0
+    warnings: tuple[str, ...] = ()
 
     @property
     def n_drive(self) -> int:
         return int(self.drive_shift.shape[0])
+
+    @property
+    def n_q_missing(self) -> int:
+        """Protocols whose first reference has no Q (left out of the likelihood)."""
+        return int(np.count_nonzero(~np.isfinite(self.q_ref)))
 
     def delta0(self, convention: Literal["weight", "f0"] = "weight") -> np.ndarray:
         """Static overlap per protocol (P,) [m]: Hertz under the load, or from f0."""
@@ -154,6 +170,9 @@ def process(
     num["row"] = t["row"].to_numpy(np.int64)
     num["line"] = t["line"].to_numpy(np.int64)
     P = len(pids)
+    untrusted = (t["q_untrusted"].to_numpy(bool) if "q_untrusted" in t
+                 else np.zeros(len(t), bool))
+    q_untrusted = np.zeros(P, dtype=bool)
     f0, q_ref, a_ref, v_ref = (np.empty(P) for _ in range(4))
     keep = np.zeros(len(t), dtype=bool)
     p_of = np.full(len(t), -1, dtype=np.int64)
@@ -165,6 +184,8 @@ def process(
         rmask = is_ref[sl]
         r = _ref_steps(step[sl][rmask], {k: v[sl][rmask] for k, v in num.items()})
         f0[p], q_ref[p] = r["f_res_Hz"][0], r["q_factor"][0]
+        first = np.flatnonzero(rmask & (step[sl] == r["step"][0]))
+        q_untrusted[p] = bool(np.isnan(q_ref[p]) and untrusted[sl][first].any())
         a_ref[p], v_ref[p] = r["amplitude_m"][0], r["drive_voltage_V"][0]
         drift = r["f_res_Hz"] / f0[p] - 1.0
         ref_parts.append(pd.DataFrame({
@@ -188,6 +209,12 @@ def process(
             reasons.update({int(i): reason for i in d_idx[~ok]})
         keep[d_idx[ok]] = True
     idx = np.flatnonzero(keep)
+    if idx.size == 0:
+        csv = Path(str(dataset.path)) / getattr(dataset, "csv_name", MEASUREMENTS)
+        raise DataError(f"{csv}: no drive sweep is left to fit: the 2 % rule excluded all "
+                        f"{len(reasons)} (each protocol's reference drifted by more than "
+                        f"{threshold:.0%} before its drive sweeps; --no-two-percent-rule "
+                        "keeps them)")
     p_idx = p_of[idx]
     volt, amp, fres = (num[c][idx] for c in ("drive_voltage_V", "amplitude_m", "f_res_Hz"))
     shift = fres / f_ref_of[idx] - 1.0
@@ -205,10 +232,37 @@ def process(
         drive_shift=shift, drive_inv_q_shift=inv_q, excluded=excluded,
         scene=dataset.scene, data_hash=dataset.data_hash, source=str(dataset.path),
         truth=dataset.truth, notes=_unused_notes(t, is_ref),
+        n_q_untrusted=int(q_untrusted.sum()),
+        warnings=_warnings(t, pids, q_ref, q_untrusted, dataset),
         references=pd.concat(ref_parts, ignore_index=True),
         options={"two_percent_rule": two_percent_rule, "shift_reference": shift_reference,
                  "threshold": threshold},
     )
+
+
+def _listed(items: list, n: int = 8) -> str:
+    return ", ".join(str(x) for x in items[:n]) + (", ..." if len(items) > n else "")
+
+
+def _warnings(t: pd.DataFrame, pids: tuple[str, ...], q_ref: np.ndarray,
+              q_untrusted: np.ndarray, dataset: Dataset) -> tuple[str, ...]:
+    """One line per thing a fit must say about these data: protocols whose reference Q
+    is missing (not in the likelihood) and sweeps whose peak fit fell back to the grid."""
+    out = []
+    csv = getattr(dataset, "csv_name", MEASUREMENTS)
+    missing = [pids[p] for p in np.flatnonzero(~np.isfinite(q_ref))]
+    if missing:
+        why = (f" ({int(q_untrusted.sum())} because the curve's -3 dB Q is not trustworthy)"
+               if q_untrusted.any() else "")
+        out.append(f"Q: {len(missing)} of {len(pids)} protocols have no reference Q{why} "
+                   f"(protocol {_listed(missing)}): their Q is not in the likelihood")
+    if "curve_grid_maximum" in t:
+        grid = sorted(int(x) for x in t.loc[t["curve_grid_maximum"].astype(bool), "line"])
+        if grid:
+            out.append(f"curves: the peak fit failed on {len(grid)} sweeps ({csv} line "
+                       f"{_listed(grid)}): their f_res is the grid maximum, good to one "
+                       "frequency step")
+    return tuple(out)
 
 
 def _unused_notes(t: pd.DataFrame, is_ref: np.ndarray) -> tuple[str, ...]:

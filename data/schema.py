@@ -58,6 +58,8 @@ class DataError(ValueError):
 def where(file: str, line: int | str, column: str) -> str:
     """``file, line N, column 'c'``: the place an error message starts with."""
     line_txt = line if isinstance(line, str) else f"line {line}"
+    if not column.isprintable() or len(column) > 40:  # a header cell of the user's: one line
+        column = _cell(column)[1:-1]
     return f"{file}, {line_txt}, column '{column}'"
 
 
@@ -91,7 +93,9 @@ def _check_columns(df: pd.DataFrame, file: str, header: str) -> None:
 def _numeric(raw: pd.Series, file: str, column: str, lines: np.ndarray, *,
              allow_empty: bool) -> np.ndarray:
     text = raw.astype(str).str.strip()
-    values = pd.to_numeric(text.where(text != "", None), errors="coerce").to_numpy(np.float64)
+    # a copy: pandas may hand out a read-only view, and NaN-marked cells are written below
+    values = pd.to_numeric(text.where(text != "", None), errors="coerce").to_numpy(
+        np.float64, copy=True)
     for i, (t, v) in enumerate(zip(text, values, strict=True)):
         if t == "" and allow_empty:
             continue
@@ -227,6 +231,11 @@ def _check_structure(out: pd.DataFrame, file: str) -> None:
                     f"protocol {out['protocol'].iloc[i]!r}, step {out['step'].iloc[i]} "
                     "mixes reference and drive sweeps")
     is_ref = out["kind"] == "reference"
+    if is_ref.all():
+        ln = out["line"]
+        raise _fail(file, f"lines {int(ln.min())}-{int(ln.max())}", "kind",
+                    "every row is a reference sweep: the table has no drive sweep "
+                    "(kind = 'drive'), so there is no shift with amplitude to fit")
     has_ref = is_ref.groupby(out["protocol"], sort=False).transform("any")
     if not has_ref.all():
         i = int(np.flatnonzero(~has_ref.to_numpy())[0])

@@ -4,7 +4,7 @@
 into the dict of arrays every model takes; observations live under ``f0``, ``shift``
 and ``q_obs`` and are set to None by :func:`without_observations` for prior predictive
 simulation. Q is observed only where the protocol has one (NaN rows are dropped
-here, once, so shapes stay static under jit).
+here, once, so shapes stay static under jit); with no Q at all there is no Q site.
 """
 
 from __future__ import annotations
@@ -139,8 +139,12 @@ def observe_logq(log_q_pred: jnp.ndarray, sigma: jnp.ndarray, obs: jnp.ndarray |
                  likelihood: str, df: float) -> jnp.ndarray:
     """Q ~ LogNormal(log Q_pred, sigma) (Q is positive and scatters multiplicatively).
 
-    The Student-t option puts the t on log Q (a log-t), exp-transformed.
+    The Student-t option puts the t on log Q (a log-t), exp-transformed. With no
+    protocol to observe (a dataset without Q) there is no site: an empty plate cannot be
+    built, and an empty observation adds nothing to the likelihood.
     """
+    if log_q_pred.shape[0] == 0:
+        return log_q_pred
     if likelihood == "normal":
         d = dist.LogNormal(log_q_pred, sigma)
     else:

@@ -131,6 +131,8 @@ def first_order_shift(law: Any, x: Any, *, delta0: Any, **kw: Any) -> jnp.ndarra
     panels split at phi_s = phi0 - 2 (2 |1 - x|)^(1/2) (no earlier than phi0/2): just below
     x = 1 the integrand is nearly singular at phi0, at a distance ~ (2 (1 - x))^(1/2), and
     one panel loses 1e-10 there; the split keeps 1e-12 against the closed forms.
+    NaN where the force is not finite somewhere on the contact arc (as the backbone,
+    which integrates the force itself).
     """
     x = jnp.abs(jnp.asarray(x, float))
     d0 = jnp.broadcast_to(jnp.asarray(delta0, float), x.shape)
@@ -146,7 +148,11 @@ def first_order_shift(law: Any, x: Any, *, delta0: Any, **kw: Any) -> jnp.ndarra
         t = a[..., None] + (b - a)[..., None] * u
         d = d0[..., None] * ratio(t)
         touching = d > 0.0
-        k = stiffness(law, jnp.where(touching, d, d0[..., None]), **kw)
+        safe = jnp.where(touching, d, d0[..., None])
+        f, k = jax.jvp(_force(law, kw), (safe,), (jnp.ones_like(safe),))
+        # the stiffness alone can be finite where the force is not (jnp.where(..., nan, F)
+        # has a zero tangent): a NaN force over the arc is NaN here, as in the backbone
+        k = jnp.where(jnp.isfinite(f), k, jnp.nan)
         return (b - a) * jnp.sum(w * jnp.where(touching, k, 0.0), axis=-1)
 
     near = lambda psi: (1.0 - x[..., None]) + 2.0 * x[..., None] * jnp.sin(0.5 * psi) ** 2

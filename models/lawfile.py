@@ -2,10 +2,14 @@
 
 The contract (docs/adding-a-law.md has an example):
 
-* ``NAME`` (str, a new law name: letters, digits, ``_``); optional ``LABEL``, ``REFERENCE``,
-  ``DESCRIPTION`` (str) and ``ADHESIVE`` (bool, default False);
-* ``PRIORS``: a dict from each law parameter to a proper prior (a NumPyro distribution,
-  or a :class:`models.law.Prior`);
+* ``NAME`` (str, a new law name: a letter, then letters, digits or ``_``, at most
+  :data:`NAME_MAX` characters, since it names the run's files ``laws/NAME.json``,
+  ``idata/NAME.nc``; not a registered law's name, in any case, nor one of the names the
+  caller reserves, such as the law-free baseline's); optional ``LABEL`` (str, one line),
+  ``REFERENCE``, ``DESCRIPTION`` (str) and ``ADHESIVE`` (bool, default False);
+* ``PRIORS``: a dict from each law parameter to a proper scalar prior with an inverse
+  CDF (a NumPyro distribution with ``icdf``, no batch or event shape; or a
+  :class:`models.law.Prior`): nested sampling and the prior tables map [0, 1] through it;
 * ``force(delta, *, ...)``: JAX-traceable, overlap delta [m] -> force F [N] (compressive
   > 0), zero for delta <= 0 unless ``ADHESIVE``. Its keyword arguments are law parameters
   (keys of ``PRIORS``) or scene quantities passed by name
@@ -18,6 +22,10 @@ dimensionless backbone turns out not to depend on its parameters or the overlap 
 shape-invariant law, such as a Hertz written from scratch), a fast table built on load
 (:mod:`models.autotable`). A file that breaks the contract raises :class:`LawFileError`
 naming the file and what is wrong.
+
+A law file is Python code: loading it runs it, with the user's rights. Everything it
+raises while it loads (an exception, ``sys.exit``, with any code) becomes one
+:class:`LawFileError`; only an interrupt (Ctrl-C) goes through as one.
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ import importlib.util
 import inspect
 import math
 import re
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -34,12 +43,23 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import registry
 from .autotable import attach_fast_backbone
 from .law import SCENE_KEYS, YOUNG, ContactLaw, Param, Prior, prior_median
 
-__all__ = ["LawFileError", "load_law_file"]
+__all__ = ["LawFileError", "load_law_file", "NAME_MAX"]
 
-_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+NAME_MAX = 64
+"""Longest NAME: it becomes file names (laws/NAME.json, idata/NAME.nc) in any folder."""
+
+# ASCII only (str.isidentifier would let in any Unicode letter); fullmatch: "$" alone
+# would accept a trailing newline
+_NAME = re.compile(rf"[A-Za-z][A-Za-z0-9_]{{0,{NAME_MAX - 1}}}")
+_QUANTILES = (0.01, 0.5, 0.99)
+# the parameters (a, b) for which a models.law.Prior of each kind is proper
+_PROPER = {"uniform": lambda a, b: a < b, "loguniform": lambda a, b: 0 < a < b,
+           "lognormal": lambda a, b: a > 0 and b > 0, "normal": lambda a, b: b > 0,
+           "halfnormal": lambda a, b: a > 0}
 
 
 class LawFileError(ValueError):
@@ -48,6 +68,18 @@ class LawFileError(ValueError):
 
 def _fail(path: Path, what: str) -> LawFileError:
     return LawFileError(f"law file {path}: {what}")
+
+
+def _raised(exc: BaseException, when: str) -> str:
+    """What the user's code did ``when``, in words: an exit and its code, or the exception
+    and the first line of its message."""
+    if isinstance(exc, SystemExit):
+        return f"called sys.exit({exc.code!r}) {when} (a law file defines a law; it must not exit)"
+    try:
+        lines = str(exc).strip().splitlines()
+    except Exception:  # noqa: BLE001  (a user exception whose __str__ fails)
+        lines = []
+    return f"raised {type(exc).__name__} {when}" + (f": {lines[0]}" if lines else "")
 
 
 def _module(path: Path):
@@ -59,31 +91,105 @@ def _module(path: Path):
     mod = importlib.util.module_from_spec(spec)
     try:
         spec.loader.exec_module(mod)
-    except Exception as exc:  # noqa: BLE001  (the user's code: report, do not crash)
-        raise _fail(path, f"raised {type(exc).__name__} on import: {exc}") from exc
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001  (the user's code, sys.exit too: report it)
+        raise _fail(path, _raised(exc, "on import")) from exc
     return mod
 
 
 def _check_prior(path: Path, name: str, prior: Any) -> None:
+    """A proper scalar prior with a finite, increasing inverse CDF (module doc)."""
+    where = f"PRIORS[{name!r}]"
     if isinstance(prior, Prior):
+        proper = _PROPER.get(prior.kind)
+        if proper is None:
+            raise _fail(path, f"{where} = {prior!r}: kind must be one of {list(_PROPER)}")
+        ab = (prior.a, prior.b)
+        if not (all(isinstance(v, (int, float)) and math.isfinite(v) for v in ab)
+                and proper(*ab)):
+            raise _fail(path, f"{where} = {prior!r} is not a proper prior (uniform, "
+                              "loguniform: a < b, loguniform a > 0; normal, lognormal: b > 0; "
+                              "lognormal, halfnormal: a > 0)")
         return
+    kind = type(prior).__name__
     if not (hasattr(prior, "log_prob") and hasattr(prior, "sample")):
-        raise _fail(path, f"PRIORS[{name!r}] is not a distribution (got "
-                          f"{type(prior).__name__})")
-    med = prior_median(prior)
-    if not math.isfinite(med):
-        raise _fail(path, f"PRIORS[{name!r}] has no finite median (improper prior?)")
+        raise _fail(path, f"{where} is not a distribution (got {kind})")
+    shape = (tuple(getattr(prior, "batch_shape", ())), tuple(getattr(prior, "event_shape", ())))
+    if shape != ((), ()):
+        raise _fail(path, f"{where} ({kind}) has batch shape {shape[0]} and event shape "
+                          f"{shape[1]}: a prior is one scalar parameter's (both ())")
+    try:
+        qs = [float(prior.icdf(jnp.asarray(q))) for q in _QUANTILES]
+    except NotImplementedError:
+        raise _fail(path, f"{where} ({kind}) has no inverse CDF (icdf); every prior must be "
+                          "a proper distribution that has one (e.g. Uniform, LogUniform, "
+                          "Normal, LogNormal; not an improper prior such as ImproperUniform): "
+                          "nested sampling and the prior tables map [0, 1] through it"
+                    ) from None
+    if not (all(math.isfinite(q) for q in qs) and qs[0] < qs[1] < qs[2]):
+        raise _fail(path, f"{where} ({kind}) has no proper quantiles: icdf at {_QUANTILES} "
+                          f"gives {qs} (finite and increasing expected)")
+    if not math.isfinite(float(prior.log_prob(jnp.asarray(qs[1])))):
+        raise _fail(path, f"{where} ({kind}) has no finite density at its median {qs[1]:.4g}")
 
 
-def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
+def _check_name(path: Path, name: Any, reserved: Mapping[str, str]) -> str:
+    """``name`` if it is a valid, free law name (refused in one line otherwise).
+
+    Taken: every registered law's name (built-in, or from another file) and the
+    ``reserved`` names, compared without case, since NAME names files and a folder on a
+    case-insensitive file system holds one of hertz.nc and Hertz.nc."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        shown = repr(name)
+        shown = "nothing" if name is None else shown if len(shown) <= 40 else shown[:36] + "..."
+        raise _fail(path, f"NAME is missing or not a name: a letter, then letters, digits or _, "
+                          f"at most {NAME_MAX} characters (e.g. NAME = \"my_law\"); got "
+                          f"{shown}")
+    mine = (str(path), str(path.resolve()))   # this very file, loaded before: not taken
+    owners = {law.name.lower(): f"the law '{law.name}' ({law.source})" for law in registry.laws()
+              if law.source not in mine}
+    owners.update({k.lower(): f"{what} ('{k}')" for k, what in reserved.items()})
+    if name.lower() in owners:
+        raise _fail(path, f"NAME = {name!r} is taken by {owners[name.lower()]}; choose "
+                          "another NAME")
+    return name
+
+
+def _optional(path: Path, mod: Any, key: str, kind: type, default: Any) -> Any:
+    value = getattr(mod, key, default)
+    if not isinstance(value, kind):
+        raise _fail(path, f"{key} must be a {kind.__name__} (got {type(value).__name__})")
+    return value
+
+
+def load_law_file(path: str | Path, scene: dict[str, float], *,
+                  reserved: Mapping[str, str] | None = None) -> ContactLaw:
     """The :class:`ContactLaw` that the file at ``path`` defines, checked against the
-    contract at the scene quantities ``scene`` and the prior medians."""
+    contract at the scene quantities ``scene`` and the prior medians.
+
+    ``reserved``: names no law may take besides the registered laws' (name -> what holds
+    it, for the message; e.g. the law-free baseline's). Whatever the file's code raises
+    while it loads becomes a :class:`LawFileError` naming the file."""
     path = Path(path)
     mod = _module(path)
-    name = getattr(mod, "NAME", None)
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise _fail(path, "NAME is missing or not a name (letters, digits, _; e.g. "
-                          "NAME = \"my_law\")")
+    try:
+        return _law_of(path, mod, scene, dict(reserved or {}))
+    except (LawFileError, KeyboardInterrupt):
+        raise
+    except BaseException as exc:  # noqa: BLE001  (the file's functions run in the checks)
+        raise _fail(path, _raised(exc, "while it was checked")) from exc
+
+
+def _law_of(path: Path, mod: Any, scene: dict[str, float],
+            reserved: dict[str, str]) -> ContactLaw:
+    name = _check_name(path, getattr(mod, "NAME", None), reserved)
+    label = _optional(path, mod, "LABEL", str, name)
+    if not label.strip() or not label.isprintable():
+        raise _fail(path, "LABEL must be one line of printable text")
+    reference = _optional(path, mod, "REFERENCE", str, f"user law file {path.name}")
+    description = _optional(path, mod, "DESCRIPTION", str, "")
+    adhesive = _optional(path, mod, "ADHESIVE", bool, False)
     priors = getattr(mod, "PRIORS", None)
     if not isinstance(priors, dict):
         raise _fail(path, "PRIORS is missing (a dict from each law parameter to a prior)")
@@ -117,11 +223,9 @@ def load_law_file(path: str | Path, scene: dict[str, float]) -> ContactLaw:
                             "modulus, with the file's prior") if k == YOUNG.name else
         Param(k, "?", k, pr, f"law-file parameter {k}") for k, pr in priors.items())
     law = ContactLaw(
-        name=name, label=str(getattr(mod, "LABEL", name)),
-        reference=str(getattr(mod, "REFERENCE", f"user law file {path.name}")),
-        description=str(getattr(mod, "DESCRIPTION", "")), params=law_params,
-        force=user_force, source=str(path))
-    _check_force(path, law, scene, adhesive=bool(getattr(mod, "ADHESIVE", False)))
+        name=name, label=label, reference=reference, description=description,
+        params=law_params, force=user_force, source=str(path))
+    _check_force(path, law, scene, adhesive=adhesive)
     return attach_fast_backbone(law, scene)
 
 
@@ -134,8 +238,10 @@ def _check_force(path: Path, law: ContactLaw, scene: dict[str, float], *,
         f0, k0 = (float(v) for v in jax.jvp(lambda d: law.force(d, **kw), (jnp.asarray(d0),),
                                             (jnp.asarray(1.0),)))
         f_neg = float(law.force(jnp.asarray(-0.5 * d0), **kw))
-    except Exception as exc:  # noqa: BLE001
-        raise _fail(path, f"force raised {type(exc).__name__}: {exc}") from exc
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001  (the user's code, sys.exit too)
+        raise _fail(path, "force " + _raised(exc, f"at the prior medians {theta}")) from exc
     where = f"at the prior medians {theta}"
     if not (np.isfinite(f0) and np.isfinite(k0)):
         raise _fail(path, f"NaN or infinite force or stiffness at the static overlap "

@@ -10,6 +10,17 @@ the median of its prior. At those values the linear state under the static load 
     K0 = F'(delta0) [N/m] (autodiff, :func:`models.generic.stiffness`),
     omega0 = sqrt(K0 / m) [rad/s], f0 = omega0 / (2 pi) [Hz],
     Q = the law's linear Q at omega0 (only for a law with a loss channel).
+
+A scene quantity set by hand (``beadrod shift --param radius=...``) is held to the rules
+of ``scene.toml`` (:func:`check_scene_values`): the value goes into the scene's own layout
+and the scene's checks (:data:`models.scenes.BOUNDS` and the rules between its keys) run
+on it, so the bounds live in one place. ``mass`` and ``load`` have no key of their own
+there: a mass is checked as the bead density it implies at the bead's radius, a load as
+the extra force it implies on the bead's weight. Which scene quantities a law takes
+(:func:`scene_names`): those with a ``scene.toml`` key that its functions may read by
+name (:data:`models.law.SCENE_KEYS`) and those its parameters take their nominal value
+from (``scene_key``); ``e_star`` is not one, :meth:`models.law.ContactLaw.resolve`
+computes it from ``young`` and ``poisson``.
 """
 
 from __future__ import annotations
@@ -18,9 +29,26 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from .law import ContactLaw, prior_median
+from .law import SCENE_KEYS, ContactLaw, prior_median
 
-__all__ = ["nominal_parameters", "checked_parameters", "linear_state"]
+__all__ = ["nominal_parameters", "checked_parameters", "linear_state", "scene_names",
+           "check_scene_values", "SCENE_PATHS"]
+
+SCENE_PATHS: dict[str, tuple[str, ...]] = {
+    "radius": ("bead", "radius_m"),
+    "young": ("materials", "bead", "young_Pa"),
+    "poisson": ("materials", "bead", "poisson"),
+    "gravity": ("preload", "gravity_m_s2"),
+    "roughness_rms": ("surfaces", "roughness_rms_m"),
+    "surface_energy": ("surfaces", "surface_energy_J_m2"),
+    "viscosity": ("surfaces", "viscosity_Pa_s"),
+    # derived there (module docstring): checked as the key they imply
+    "mass": ("materials", "bead", "density_kg_m3"),
+    "load": ("preload", "extra_force_N"),
+}
+"""Scene quantity -> its key in the layout of :func:`models.scenes.scene_to_dict` (the
+bead's material is ``materials.bead`` there)."""
+_DERIVED = ("mass", "load")
 
 
 def nominal_parameters(law: ContactLaw, scene: Mapping[str, float],
@@ -73,3 +101,56 @@ def linear_state(law: ContactLaw, scene: Mapping[str, float],
     kw.update(delta0=d0, omega0=omega0)
     q = float(law.quality_factor(**kw)) if law.predicts_q else None
     return {"delta0_m": d0, "K0_N_m": k0, "f0_Hz": omega0 / (2.0 * math.pi), "Q": q, "kw": kw}
+
+
+def scene_names(law: ContactLaw) -> tuple[str, ...]:
+    """The scene quantities a value set by hand reaches ``law`` through (module
+    docstring), its own parameters' names left out (a value of that name is the
+    parameter's)."""
+    keys = set(SCENE_KEYS) | {p.scene_key for p in law.params if p.scene_key}
+    return tuple(k for k in SCENE_PATHS if k in keys and k not in law.param_names)
+
+
+def check_scene_values(scene: Any, values: Mapping[str, float]) -> None:
+    """Check scene quantities set by hand (names of :data:`SCENE_PATHS`) by the rules of
+    ``scene.toml``, all of them applied to ``scene`` (a :class:`models.scenes.Scene`);
+    models.scenes.SceneError (a ValueError: the scene's message, naming its key) if the
+    scene they make is not one."""
+    from .scenes import scene_from_dict, scene_to_dict
+
+    if not values:
+        return
+    d = scene_to_dict(scene)
+    shown = []
+    for name, value in values.items():
+        v = float(value)
+        if not math.isfinite(v):
+            raise ValueError(f"{name} = {value}: must be a finite number")
+        shown.append(f"{name} = {v:g}")
+        if name not in _DERIVED:
+            _put(d, SCENE_PATHS[name], v)
+    if "mass" in values:  # after the radius: the density of a bead of that radius
+        rho = float(values["mass"]) / _bead_mass(d["bead"]["radius_m"], 1.0)
+        _put(d, SCENE_PATHS["mass"], rho)
+        shown[list(values).index("mass")] += f" (a bead density of {rho:.4g} kg/m^3)"
+    made = scene_from_dict(d, f"scene '{scene.name}' with {', '.join(shown)}")
+    if "load" in values:  # the force on top of the weight of the scene made so far
+        extra = float(values["load"]) - made.weight
+        _put(d, SCENE_PATHS["load"], extra)
+        shown[list(values).index("load")] += f" (an extra force of {extra:.4g} N)"
+        scene_from_dict(d, f"scene '{scene.name}' with {', '.join(shown)}")
+
+
+def _bead_mass(radius: float, density: float) -> float:
+    import jax
+
+    from .materials import bead_mass
+
+    with jax.enable_x64(True):
+        return float(bead_mass(radius, density))
+
+
+def _put(d: dict, path: tuple[str, ...], value: float) -> None:
+    for key in path[:-1]:
+        d = d[key]
+    d[path[-1]] = value

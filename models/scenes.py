@@ -22,9 +22,12 @@ Layout (SI units, the unit is part of every key name)::
 ``displacement_per_volt`` is the rod-end (base) displacement amplitude per drive volt.
 Errors (:class:`SceneError`) name the file and the key; unknown keys are rejected with
 the closest valid key suggested. Every number must lie within the physical bounds of
-``BOUNDS`` (each with its reason), so that no derived quantity (mass, load, static
-overlap) can be infinite or zero. ``young_range`` applies to the bead material and, when
-the rod is made of the same named material, to the rod too (paper: both are the steel).
+``BOUNDS`` (each with its reason; ``quality_factor`` strictly above its lower bound), so
+that no derived quantity (mass, load, static overlap) can be infinite or zero. The file is
+read by :func:`models.tomlfile.read_toml` (a UTF-8 byte-order mark is accepted; a folder,
+non-UTF-8 bytes and nesting too deep to parse are one-line errors). ``young_range`` applies
+to the bead material and, when the rod is made of the same named material, to the rod too
+(paper: both are the steel); its ends lie within the bounds of ``young_Pa``.
 """
 
 from __future__ import annotations
@@ -32,7 +35,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -46,6 +48,7 @@ from .materials import (
     effective_modulus,
     effective_radius,
 )
+from .tomlfile import describe_value, read_toml
 
 __all__ = [
     "Scene",
@@ -192,6 +195,9 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
 }
 """Physical bounds [SI unit of the key] on every number of a scene, with the reason."""
 
+_OPEN_LOW = frozenset({"quality_factor"})
+"""Keys whose lower bound is excluded (Q = 1/2 is critical damping: no resonance)."""
+
 _REQ, _OPT = True, False
 _TOP = {"name": (_REQ, str), "description": (_OPT, str), "young_range_Pa": (_OPT, list),
         "materials": (_REQ, dict), "bead": (_REQ, dict), "rod": (_REQ, dict),
@@ -212,13 +218,23 @@ _TABLES = {
 }
 
 
+def _label(key: Any) -> str:
+    """A key or name from the file as it can stand in a one-line message (a quoted TOML
+    key may hold a line break or be a page long)."""
+    text = str(key)
+    if text.isprintable() and len(text) <= 40:
+        return text
+    shown = repr(text)[1:-1]
+    return shown if len(shown) <= 40 else shown[:37] + "..."
+
+
 def _check_keys(table: dict, schema: dict, source: str, where: str) -> None:
     for key in table:
         if key not in schema:
             close = difflib.get_close_matches(key, list(schema), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else \
                 f" (valid keys: {', '.join(schema)})"
-            raise SceneError(f"{source}: {where}unknown key '{key}'{hint}")
+            raise SceneError(f"{source}: {where}unknown key '{_label(key)}'{hint}")
     for key, (required, _) in schema.items():
         if required and key not in table:
             raise SceneError(f"{source}: {where}missing required key '{key}'")
@@ -229,8 +245,9 @@ def _num(table: dict, key: str, source: str, where: str, *, positive: bool = Tru
     if key not in table:
         return default
     v = table[key]
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise SceneError(f"{source}: {where}'{key}' must be a finite number, got {v!r}")
+    if isinstance(v, bool) or not isinstance(v, int | float) or not _finite(v):
+        raise SceneError(f"{source}: {where}'{key}' must be a finite number, got "
+                         f"{describe_value(v)}")
     v = float(v)
     if positive and not nonneg and v <= 0:
         raise SceneError(f"{source}: {where}'{key}' must be > 0, got {v!r}")
@@ -238,24 +255,37 @@ def _num(table: dict, key: str, source: str, where: str, *, positive: bool = Tru
         raise SceneError(f"{source}: {where}'{key}' must be >= 0, got {v!r}")
     if key in BOUNDS:
         lo, hi, why = BOUNDS[key]
-        if not lo <= v <= hi:
+        open_low = key in _OPEN_LOW
+        if not ((lo < v if open_low else lo <= v) and v <= hi):
             raise SceneError(f"{source}: {where}'{key}' = {v!r} lies outside the physical "
-                             f"bounds [{lo:g}, {hi:g}] ({why})")
+                             f"bounds {'(' if open_low else '['}{lo:g}, {hi:g}] ({why})")
     return v
+
+
+def _finite(v: int | float) -> bool:
+    # a TOML integer has no size limit: one beyond the float range is not a finite number
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
 
 
 def _str(table: dict, key: str, source: str, where: str) -> str:
     v = table[key]
     if not isinstance(v, str):
-        raise SceneError(f"{source}: {where}'{key}' must be a string, got {v!r}")
+        raise SceneError(f"{source}: {where}'{key}' must be a string, got {describe_value(v)}")
     return v
 
 
 def _material(name: str, table: Any, source: str) -> Material:
-    where = f"[materials.{name}] "
+    name_txt = _label(name)
+    where = f"[materials.{name_txt}] "
     if not isinstance(table, dict):
-        raise SceneError(f"{source}: [materials] '{name}' must be a table")
+        raise SceneError(f"{source}: [materials] '{name_txt}' must be a table "
+                         f"[materials.{name_txt}], got {describe_value(table)}")
     _check_keys(table, _MATERIAL, source, where)
+    if "name" in table:
+        _str(table, "name", source, where)
     nu = _num(table, "poisson", source, where, positive=False)
     if not -1.0 < nu < 0.5:
         raise SceneError(f"{source}: {where}'poisson' must lie in (-1, 0.5), got {nu!r}")
@@ -274,6 +304,11 @@ def scene_from_dict(d: dict, source: str = "<dict>") -> Scene:
     if not isinstance(d, dict):
         raise SceneError(f"{source}: a scene must be a table")
     _check_keys(d, _TOP, source, "")
+    for key, (_, kind) in _TOP.items():
+        if key in d and not isinstance(d[key], kind):
+            shape = {str: "a string", list: "a list [lo, hi]",
+                     dict: f"a table [{key}]"}[kind]
+            raise SceneError(f"{source}: '{key}' must be {shape}, got {describe_value(d[key])}")
     for tname, schema in _TABLES.items():
         t = d.get(tname, {})
         if not isinstance(t, dict):
@@ -289,8 +324,8 @@ def scene_from_dict(d: dict, source: str = "<dict>") -> Scene:
         if key not in materials:
             close = difflib.get_close_matches(key, list(materials), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise SceneError(f"{source}: [{tname}] material: no [materials.{key}]{hint}; "
-                             f"defined: {', '.join(materials)}")
+            raise SceneError(f"{source}: [{tname}] material: no [materials.{_label(key)}]"
+                             f"{hint}; defined: {', '.join(_label(m) for m in materials)}")
         return materials[key]
 
     bead, rod, pre, srf, drv = (d[k] if k in d else {} for k in
@@ -300,10 +335,15 @@ def scene_from_dict(d: dict, source: str = "<dict>") -> Scene:
     young_range = None
     if yr is not None:
         if (not isinstance(yr, list) or len(yr) != 2
-                or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in yr)
+                or not all(isinstance(v, int | float) and not isinstance(v, bool)
+                           and _finite(v) for v in yr)
                 or not 0 < yr[0] <= yr[1]):
             raise SceneError(f"{source}: 'young_range_Pa' must be [lo, hi] with 0 < lo <= hi, "
-                             f"got {yr!r}")
+                             f"got {describe_value(yr)}")
+        lo, hi, why = BOUNDS["young_Pa"]  # a range of the same modulus
+        if not lo <= yr[0] <= yr[1] <= hi:
+            raise SceneError(f"{source}: 'young_range_Pa' = {describe_value(yr)} lies outside "
+                             f"the physical bounds of 'young_Pa', [{lo:g}, {hi:g}] ({why})")
         young_range = (float(yr[0]), float(yr[1]))
     scene = Scene(
         name=name,
@@ -344,20 +384,9 @@ def scene_from_dict(d: dict, source: str = "<dict>") -> Scene:
 def load_scene(path: str | Path) -> Scene:
     """Read a scene TOML file; errors name the file and the offending key."""
     path = Path(path)
-    if path.is_dir():
-        raise SceneError(f"{path}: is a folder, not a scene file (give its .toml file; "
-                         "models/scenes/paper.toml shows the layout)")
-    try:
-        with open(path, "rb") as fh:
-            d = tomllib.load(fh)
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such scene file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from None
-    except UnicodeDecodeError:
-        raise SceneError(f"{path}: not UTF-8 text, so not a TOML file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file ({exc.strerror})") from None
+    hint = "give its .toml file; models/scenes/paper.toml shows the layout"
+    d = read_toml(path, error=SceneError, what="scene file",
+                  hint=hint if path.is_dir() else "")
     return scene_from_dict(d, str(path))
 
 

@@ -478,9 +478,8 @@ def runs(tmp_path_factory):
         "cache_key"]
     stages["reference"]["key_before"] = key_a
     stages["reference"]["resolved"] = tomllib.loads((out / "config.resolved.toml").read_text())
-    # 5. --force over a folder with another run's laws (and a file of the user's), no Q
-    (out / "laws" / "jkr.json").write_text("{}")
-    (out / "idata" / "jkr.nc").write_bytes(b"")
+    # 5. --force over a folder with another run's laws (powerlaw) and a file of the
+    # user's, no Q
     (out / "notes.txt").write_text("mine\n")
     cfg_c = _config(tmp / "c.toml", NOFIG + "[likelihood]\nuse_q = false\n")
     stages["force"] = _run(["fit", "--law", "hertz", "--config", cfg_c, *base, "--force",
@@ -547,7 +546,7 @@ def test_force_removes_the_earlier_run_and_use_q_false_drops_q(runs):
     assert r["rc"] == 0
     files = r["files"]
     assert "notes.txt" in files  # not beadrod's: left alone
-    assert not any("jkr" in f or "powerlaw" in f for f in files), files
+    assert not any("powerlaw" in f for f in files), files
     assert "q_obs" not in r["groups"]["log_likelihood"]
     assert "q_obs" not in r["groups"]["observed_data"]
     assert "shift_obs" in r["groups"]["log_likelihood"]

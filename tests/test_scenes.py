@@ -248,3 +248,87 @@ def test_scene_file_that_is_not_text(tmp_path):
     with pytest.raises(SceneError) as exc:
         scenes.load_scene(p)
     assert str(exc.value).count(str(p)) == 1
+
+
+# --- issue 47, item 19: scene files of the wrong shape, one line each ----------------------
+
+STEEL = "[materials.steel]\nyoung_Pa = 200e9\npoisson = 0.27\ndensity_kg_m3 = 7700\n"
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    (STEEL, "materials = 5\n", "'materials' must be a table [materials], got 5"),
+    (STEEL, "materials = [1, 2]\n", "'materials' must be a table [materials], got [1, 2]"),
+    ('name = "t"', "name = 7", "'name' must be a string, got 7"),
+    ('name = "t"', 'name = "t"\ndescription = [1]', "'description' must be a string"),
+    ('name = "t"', 'name = "t"\nyoung_range_Pa = 5', "'young_range_Pa' must be a list"),
+    ("[materials.steel]\n", '[materials.steel]\nname = 3\n', "'name' must be a string"),
+    ("young_Pa = 200e9", "young_Pa = " + "9" * 400, "'young_Pa' must be a finite number"),
+    ("young_Pa = 200e9", "young_Pa = [[[[[[1]]]]]]", "'young_Pa' must be a finite number"),
+])
+def test_scene_values_of_the_wrong_type(tmp_path, old, new, needle):
+    assert old in BASE
+    p = _toml(tmp_path, BASE.replace(old, new, 1), "typed.toml")
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(p)
+    msg = str(exc.value)
+    assert needle in msg and "\n" not in msg and len(msg) < 400, msg
+
+
+def test_scene_quality_factor_of_one_half_is_refused(tmp_path):
+    text = BASE.replace("surface_energy_J_m2 = 0.7",
+                        "surface_energy_J_m2 = 0.7\nquality_factor = 0.5")
+    with pytest.raises(SceneError, match=r"'quality_factor' = 0\.5 lies outside the physical "
+                                         r"bounds \(0\.5, 100000\] \(above 1/2"):
+        scenes.load_scene(_toml(tmp_path, text))
+    ok = text.replace("quality_factor = 0.5", "quality_factor = 0.51")
+    assert scenes.load_scene(_toml(tmp_path, ok, "ok.toml")).quality_factor == 0.51
+
+
+@pytest.mark.parametrize("value", ["[1, 1e300]", "[1, 2e11]", "[1e11, 1e13]"])
+def test_scene_young_range_is_bounds_checked(tmp_path, value):
+    text = BASE.replace('name = "t"', f'name = "t"\nyoung_range_Pa = {value}')
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(_toml(tmp_path, text))
+    assert "'young_range_Pa'" in str(exc.value) and "[1000, 1.2e+12]" in str(exc.value)
+
+
+def test_scene_with_a_byte_order_mark_loads_as_without(tmp_path):
+    plain = scenes.load_scene(_toml(tmp_path, BASE, "plain.toml"))
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + BASE.encode())
+    assert scenes.load_scene(p) == plain
+
+
+@pytest.mark.parametrize("text", ["a = " + "[" * 5000 + "]" * 5000,
+                                  "a = " + "{b = " * 3000 + "1" + "}" * 3000])
+def test_scene_nested_too_deeply_is_one_line(tmp_path, text):
+    p = _toml(tmp_path, text, "deep.toml")
+    with pytest.raises(SceneError) as exc:
+        scenes.load_scene(p)
+    msg = str(exc.value)
+    assert msg.startswith(str(p)) and "nested too deeply" in msg and "\n" not in msg
+
+
+def test_read_toml_names_the_file_for_every_failure(tmp_path):
+    # the one reader of user TOML, for scene and config files alike (models.tomlfile)
+    from models.tomlfile import read_toml
+
+    class Mine(ValueError):
+        pass
+
+    cases = {"deep.toml": ("a = " + "[" * 3000 + "]" * 3000).encode(),
+             "latin1.toml": b'a = 1\nb = "\xe9"\n', "bad.toml": b"a = = 1\n"}
+    needles = {"deep.toml": "nested too deeply", "latin1.toml": "line 2: not UTF-8",
+               "bad.toml": "not valid TOML"}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(Mine) as exc:
+            read_toml(tmp_path / name, error=Mine, what="config file")
+        assert str(exc.value).startswith(str(tmp_path / name))
+        assert needles[name] in str(exc.value) and "\n" not in str(exc.value)
+    with pytest.raises(Mine, match="is a folder, not a config file"):
+        read_toml(tmp_path, error=Mine, what="config file")
+    with pytest.raises(Mine, match="no such config file"):
+        read_toml(tmp_path / "none.toml", error=Mine, what="config file")
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbfa = 1\n")
+    assert read_toml(tmp_path / "bom.toml") == {"a": 1}

@@ -10,13 +10,22 @@ import argparse
 import importlib
 from pathlib import Path
 
-__all__ = ["register", "BENCHES", "BENCH_EXTRAS"]
+__all__ = ["register", "BENCHES", "BENCH_EXTRAS", "BENCH_OUTPUTS"]
 
 BENCHES: dict[str, str] = {
     "physics": "workflows.bench_physics",
     "accuracy": "workflows.bench_accuracy",
     "inference": "workflows.bench_inference",
     "device": "workflows.bench_device",
+}
+
+
+# the files each benchmark writes into --out ({platform}: JAX's backend, cpu or gpu)
+BENCH_OUTPUTS: dict[str, tuple[str, ...]] = {
+    "physics": ("bench_physics.csv", "bench_physics.md"),
+    "accuracy": ("accuracy.csv", "accuracy.md", "accuracy.png", "accuracy.pdf"),
+    "inference": ("bench_inference.csv", "bench_inference.md"),
+    "device": ("bench_device_{platform}.csv", "bench_device_{platform}.md"),
 }
 
 
@@ -51,6 +60,11 @@ def _run(args: argparse.Namespace) -> int:
 
     # compile times are part of what a benchmark reports: no persistent cache here
     jax.config.update("jax_compilation_cache_dir", None)
+    from .outdir import check_out
+
+    platform = jax.devices()[0].platform
+    check_out(Path(args.out), force=args.force, command=f"bench {args.which}",
+              outputs=[o.format(platform=platform) for o in BENCH_OUTPUTS[args.which]])
     from inference.sample import configure
 
     configure(4)
@@ -82,6 +96,9 @@ def register(sub) -> None:
     p.add_argument("--quick", action="store_true",
                    help="tiny counts (smoke run; numbers not meaningful)")
     p.add_argument("--quiet", action="store_true", help="do not print the table")
+    p.add_argument("--force", action="store_true", help="replace this benchmark's files "
+                   "that an earlier 'beadrod bench' wrote into --out (never a file beadrod "
+                   "did not write)")
     p.add_argument("--laws", default=None,
                    help="device only: comma-separated laws for the NUTS rows (default: all)")
     p.set_defaults(func=_run)

@@ -80,12 +80,29 @@ def failed_fits(result: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def check_laws(cfg: dict[str, Any]) -> None:
-    """Law names of ``cfg`` against the registry (before any data are loaded). Imports the
-    models: call after the host device count is set."""
+    """Law names of ``cfg`` against the registry (before any data are loaded), the law
+    files loaded (workflows.lawfiles.load). Imports the models: call after the host device
+    count is set.
+
+    With ``laws`` given, a law file whose law they leave out is refused: its code ran for
+    nothing, and whoever added it expects its law in the tables. It is not added
+    silently either: ``laws`` says exactly what is fitted."""
+    from models.registry import laws
+
     from .config import normalise_laws
     from .pipeline import model_names
+    from .runtime import UserError
 
     cfg["laws"] = normalise_laws(cfg["laws"], model_names())
+    if cfg["laws"] is None:
+        return
+    files = {str(Path(f).resolve()): f for f in cfg["law_files"]}
+    for law in laws():
+        if law.source in files and law.name not in cfg["laws"]:
+            raise UserError(f"--law-file {files[law.source]} gives law '{law.name}', which "
+                            f"the laws to fit ({', '.join(cfg['laws'])}) leave out: add "
+                            f"'{law.name}' to them (--laws, or --law for fit) or leave the "
+                            "file out")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -127,12 +144,13 @@ def add_sampling_args(p: argparse.ArgumentParser) -> None:
     """--seed, --chains, --workers, --warmup, --samples, --extensions (compare, fit,
     rungs)."""
     s = DEFAULTS["sampling"]
-    p.add_argument("--seed", type=int, help="random seed: same seed, same numbers "
-                   f"(default: {DEFAULTS['seed']})")
+    p.add_argument("--seed", type=int, help="random seed in [0, 2**32 - 1]: same seed, "
+                   f"same numbers (default: {DEFAULTS['seed']})")
     p.add_argument("--chains", type=int, help=f"NUTS chains (default: {s['chains']})")
     p.add_argument("--workers", type=int, help="fits run side by side in this many worker "
-                   "processes (default: 0, two or one per two usable cores, at most 4; "
-                   "1: no worker processes); the results do not depend on it")
+                   "processes, at most the usable cores, each a JAX process of 1-3 GB "
+                   "(default: 0, two or one per two usable cores, at most 4; 1: no worker "
+                   "processes); the results do not depend on it")
     p.add_argument("--warmup", type=int, help="NUTS warmup iterations per chain, >= 20 "
                    f"(default: {s['warmup']})")
     p.add_argument("--samples", type=int, help="NUTS draws per chain, >= 20 "

@@ -6,7 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
-__all__ = ["register"]
+__all__ = ["register", "OUTPUTS", "N_FREQ"]
+
+OUTPUTS = ("sweep.json", "frc.csv", "frc.png", "frc.pdf")
+N_FREQ = (5, 2001)  # a peak needs a few points; past a few thousand the sweep takes hours
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -25,12 +28,16 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--drive", type=float, nargs="+", default=None, metavar="V",
                    help="drive levels [V] (default: 4 levels from the scene's voltage_min "
                    "to voltage_max, geometric)")
-    p.add_argument("--n-freq", type=int, default=41, help="coarse frequencies per sweep")
+    p.add_argument("--n-freq", type=int, default=41,
+                   help=f"coarse frequencies per sweep, {N_FREQ[0]} to {N_FREQ[1]} "
+                   "(default: %(default)s)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="also write into DIR: sweep.json, and the frequency-response curves "
                    "(frc.csv; frc.png and frc.pdf: bead amplitude versus drive frequency, up "
                    "and down, at each drive level)")
+    p.add_argument("--force", action="store_true", help="replace the files an earlier "
+                   "'beadrod sweep' wrote into --out (never a file beadrod did not write)")
     p.set_defaults(func=run)
     return p
 
@@ -70,6 +77,20 @@ def _write_curves(out: Path, c: dict) -> None:
     save_figure(fig_frc(np.asarray(c["frequency_hz"]), amps, labels), out / "frc")
 
 
+def _check_options(args: argparse.Namespace) -> None:
+    import math
+
+    from workflows.runtime import UserError
+
+    if not N_FREQ[0] <= args.n_freq <= N_FREQ[1]:
+        raise UserError(f"--n-freq must be an integer from {N_FREQ[0]} to {N_FREQ[1]}, "
+                        f"got {args.n_freq}")
+    for v in args.drive or ():
+        if not (math.isfinite(v) and v > 0):
+            raise UserError(f"--drive: every drive level must be a finite voltage > 0 [V], "
+                            f"got {v}")
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -77,8 +98,12 @@ def run(args: argparse.Namespace) -> int:
     from models.simulate import PlasticityError, build_simulator
     from workflows._io import write_json
     from workflows.cmd_scene import resolve_scene
+    from workflows.outdir import check_out
     from workflows.runtime import UserError
 
+    _check_options(args)
+    if args.out is not None:
+        check_out(args.out, force=args.force, outputs=OUTPUTS, command="sweep")
     try:
         scene, _ = resolve_scene(args.scene, args.builtin)
         drives = args.drive or list(np.geomspace(max(scene.voltage_min, 1e-3 *

@@ -27,7 +27,7 @@ def _run(args: argparse.Namespace) -> int:
     if cfg["out"] == DEFAULTS["out"]:  # set neither by flag nor by the config file
         cfg["out"] = "beadrod-rungs"
     out = Path(cfg["out"])
-    check_out(out, force=args.force, resume=False)
+    check_out(out, force=args.force, command="rungs")
     runtime.setup_logging(out, cfg["quiet"])
     runtime.host_devices(n_devices(cfg))  # before JAX starts
     from inference.sample import configure

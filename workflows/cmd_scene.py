@@ -12,6 +12,8 @@ import json
 import math
 from pathlib import Path
 
+from .cmd_shift import resolve_scene
+
 __all__ = ["register", "scene_quantities", "resolve_scene", "check_given"]
 
 
@@ -38,18 +40,6 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output (SI keys)")
     p.set_defaults(func=run)
     return p
-
-
-def resolve_scene(path: Path | None, builtin: str | None):
-    """The scene named by a file or a built-in name (default: the paper's)."""
-    from models.scenes import builtin_scene, load_scene
-
-    if path is not None and builtin is not None:
-        raise ValueError("give either a scene file or --builtin, not both")
-    if path is not None:
-        return load_scene(path), str(path)
-    name = builtin or "paper"
-    return builtin_scene(name), f"builtin:{name}"
 
 
 def _f(x) -> float:

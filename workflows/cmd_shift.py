@@ -15,6 +15,16 @@ reason (exit status 2):
   physical bounds of its quantity (Young's modulus, viscosities and surface energies:
   models.scenes.BOUNDS). The law's parameter says which; nothing here lists them.
 
+* a scene quantity set by hand (``--param radius=...``) is held to the rules of
+  ``scene.toml`` (models.nominal.check_scene_values: the scene's own bounds); a name that
+  is neither a parameter of the law nor a scene quantity the law takes
+  (models.nominal.scene_names) is refused with the names it takes.
+
+Every input is used or refused: ``--scene`` with ``--builtin``, a shorthand flag for a
+law without such a parameter (:data:`FLAGS`), two values for one name, and a scene
+quantity whose every use is overridden are refused, as ``--n`` for a law without an
+exponent always was.
+
 The parameter checks are small functions (:func:`check_x`, :func:`check_param`) so that
 any way of passing a parameter goes through the same check.
 """
@@ -25,6 +35,7 @@ import argparse
 import json
 import math
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from models.rungs import RUNGS
@@ -32,7 +43,8 @@ from models.rungs import RUNGS
 from . import lawfiles
 
 __all__ = ["register", "shift_table", "check_x", "check_param", "check_method", "X_MAX",
-           "METHODS", "scene_keywords", "parse_params"]
+           "METHODS", "scene_keywords", "parse_params", "given_values", "FLAGS",
+           "resolve_scene"]
 
 X_MAX = 2.0
 """Largest x = delta_a/delta0 computed (models.backbone_table.X_MAX: the tables end there)."""
@@ -41,6 +53,12 @@ X_MAX = 2.0
 # computes those it lists in its ``rungs`` (check_method)
 # as everywhere else
 METHODS = tuple(RUNGS)
+
+FLAGS: dict[str, str] = {"n": "n", "young": "young", "eta": "viscosity"}
+"""Shorthand flag -> the quantity it sets: every parameter of the law of the flag's name
+or whose nominal value is that scene quantity (``--eta``: each viscosity of the law),
+else that scene quantity where the law takes it (models.nominal.scene_names); a law
+with none of these refuses the flag."""
 
 # the former law name of the paper's Eq. 25, kept as a spelling of (viscoelastic, paper_eq25)
 _ALIASES = {"viscoelastic_paper_eq25": ("viscoelastic", "paper_eq25")}
@@ -108,7 +126,8 @@ def scene_keywords(scene: Any) -> dict[str, float]:
 
 
 def parse_params(items: Sequence[str] | None) -> dict[str, float]:
-    """``KEY=VALUE`` strings as a dict of floats; ValueError naming a malformed item."""
+    """``KEY=VALUE`` strings as a dict of floats; ValueError naming a malformed item or a
+    key given twice with different values."""
     out: dict[str, float] = {}
     for item in items or []:
         key, sep, val = item.partition("=")
@@ -116,56 +135,113 @@ def parse_params(items: Sequence[str] | None) -> dict[str, float]:
         if not sep or not key:
             raise ValueError(f"--param {item!r}: write KEY=VALUE, e.g. --param young=2e11")
         try:
-            out[key] = float(val)
+            v = float(val)
         except ValueError:
             raise ValueError(f"--param {item!r}: {val!r} is not a number") from None
+        if key in out and not _same(out[key], v):
+            raise ValueError(f"--param {key}={_fmt(out[key])} and --param {key}={_fmt(v)} "
+                             "contradict each other: give one value")
+        out[key] = v
     return out
 
 
+def _same(a: float, b: float) -> bool:
+    return a == b or (math.isnan(a) and math.isnan(b))
+
+
+def given_values(law: Any, params: dict[str, float],
+                 flags: dict[str, float | None]) -> tuple[dict[str, float], dict[str, float]]:
+    """(law parameters, scene quantities) set by ``params`` (``--param`` by name) and the
+    shorthand ``flags`` (:data:`FLAGS`, None: not given), unchecked; ValueError for a
+    flag the law has no use for, a name it does not take (naming those it takes), two
+    values for one name, or a scene quantity whose every use is overridden."""
+    from models.law import SCENE_KEYS
+    from models.nominal import scene_names
+
+    takes = scene_names(law)
+    source = {k: f"--param {k}={_fmt(v)}" for k, v in params.items()}
+    given = dict(params)
+
+    def names() -> str:
+        return (f"its parameters: {', '.join(law.param_names)}; the scene quantities it "
+                f"takes: {', '.join(takes)}")
+
+    for flag, v in flags.items():
+        if v is None:
+            continue
+        quantity = FLAGS[flag]
+        targets = [p.name for p in law.params if p.name == flag or p.scene_key == quantity]
+        if not targets and quantity in takes:
+            targets = [quantity]
+        if not targets:
+            raise ValueError(f"--{flag}: law '{law.name}' has no parameter --{flag} sets "
+                             f"({quantity}); {names()}")
+        for name in targets:
+            if name in given and not _same(given[name], v):
+                raise ValueError(f"--{flag} {_fmt(v)} and {source[name]} both set {name}: "
+                                 "give one value")
+            given[name], source[name] = v, f"--{flag} {_fmt(v)}"
+    unknown = [k for k in given if k not in law.param_names and k not in takes]
+    if unknown:
+        derived = [k for k in unknown if k in SCENE_KEYS]
+        why = (f" ({', '.join(derived)}: computed from the other scene quantities, not set "
+               "by hand)" if derived else "")
+        raise ValueError(f"law '{law.name}' takes no {', '.join(unknown)}{why}; {names()}")
+    theta = {k: v for k, v in given.items() if k in law.param_names}
+    scene = {k: v for k, v in given.items() if k not in law.param_names}
+    for k in scene:
+        fed = [p.name for p in law.params if p.scene_key == k]
+        if k not in SCENE_KEYS and fed and all(p in theta for p in fed):
+            raise ValueError(f"{source[k]} is not used: law '{law.name}' takes {k} only as "
+                             f"the value of {', '.join(fed)}, given as well")
+    return theta, scene
+
+
+def resolve_scene(path: Path | str | None, builtin: str | None, *,
+                  flag: str = "a scene file"):
+    """(scene, source) named by a file or a built-in name (default: the paper's); both
+    given is refused (``flag``: how the command names the file)."""
+    from models.scenes import builtin_scene, load_scene
+
+    if path is not None and builtin is not None:
+        raise ValueError(f"give either {flag} or --builtin, not both")
+    if path is not None:
+        return load_scene(path), str(path)
+    name = builtin or "paper"
+    return builtin_scene(name), f"builtin:{name}"
+
+
 def shift_table(law: str, x: list[float], *, method: str, n: float | None,
-                scene_path: str | None, builtin: str, young: float | None,
+                scene_path: str | None, builtin: str | None, young: float | None,
                 eta: float | None, params: dict[str, float] | None = None,
                 law_files: list[str] | None = None) -> dict:
     """Delta f/f0 at each x for ``law`` (SI units in keys).
 
-    ``n``, ``young`` and ``eta`` are shorthand flags; ``params`` any law parameter or scene
-    quantity by name (``beadrod laws`` lists them). A law parameter not given takes the
-    scene's value where the scene has one, else its prior median; ``sources`` says which.
-    Every value is checked (:func:`check_x`, :func:`check_param`)."""
+    ``n``, ``young`` and ``eta`` are shorthand flags (:data:`FLAGS`); ``params`` any law
+    parameter or scene quantity by name (``beadrod laws`` lists them; :func:`given_values`).
+    ``builtin`` (default: the paper's scene) and ``scene_path`` exclude each other. A law
+    parameter not given takes the scene's value where the scene has one, else its prior
+    median; ``sources`` says which. Every value is checked (:func:`check_x`,
+    :func:`check_param`, models.nominal.check_scene_values)."""
     import numpy as np
 
-    from models.law import SCENE_KEYS
-    from models.nominal import checked_parameters, linear_state
+    from models.nominal import check_scene_values, checked_parameters, linear_state
     from models.registry import get_law
-    from models.scenes import builtin_scene, load_scene
 
-    from . import lawfiles
-
-    scene = load_scene(scene_path) if scene_path else builtin_scene(builtin)
+    scene = resolve_scene(scene_path, builtin, flag="--scene")[0]
     lawfiles.load(law_files or [], scene)
     if law in _ALIASES:
         law, method = _ALIASES[law]
     xs = check_x(x)
     contact = get_law(law)
-    given = dict(params or {})
-    for k, v in (("n", n), ("young", young), ("eta", eta)):
-        if v is not None:
-            given[k] = v
-    if "eta" in given and "eta" not in contact.param_names:
-        for k in ("eta_shift", "eta_q"):  # --eta sets both viscosities of the split law
-            if k in contact.param_names:
-                given.setdefault(k, given["eta"])
-        given.pop("eta", None)
-    unknown = [k for k in given if k not in contact.param_names and k not in SCENE_KEYS]
-    if unknown:
-        raise ValueError(f"law '{law}' has no parameter {unknown}; its parameters: "
-                         f"{list(contact.param_names)}; scene quantities: {list(SCENE_KEYS)}")
+    given, scene_given = given_values(contact, dict(params or {}),
+                                      {"n": n, "young": young, "eta": eta})
     given = {k: check_param(contact, k, v) for k, v in given.items()}
+    check_scene_values(scene, scene_given)
     rung = check_method(contact, method)
     sc = scene_keywords(scene)
-    sc.update({k: v for k, v in given.items() if k in SCENE_KEYS})
-    theta, sources = checked_parameters(contact, sc, {k: v for k, v in given.items()
-                                                 if k in contact.param_names})
+    sc.update(scene_given)
+    theta, sources = checked_parameters(contact, sc, given)
     state = linear_state(contact, sc, theta)
     kw, d0 = state["kw"], state["delta0_m"]
     xa = np.asarray(xs, float)
@@ -241,9 +317,10 @@ def register(sub) -> None:
                    "scene's value where it has one, else its prior median")
     lawfiles.add_argument(p)
     p.add_argument("--scene", help="scene TOML (default: the built-in scene)")
-    p.add_argument("--builtin", default="paper", help="built-in scene name (default: paper)")
+    p.add_argument("--builtin", help="built-in scene name instead of --scene (default: "
+                   "paper)")
     p.add_argument("--young", type=float, help="Young's modulus [Pa] overriding the scene's")
-    p.add_argument("--eta", type=float, help="viscosity [Pa s] >= 0 for viscoelastic laws "
-                   "(default: the scene's)")
+    p.add_argument("--eta", type=float, help="viscosity [Pa s] >= 0, every viscosity of a "
+                   "viscoelastic law (default: the scene's)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_run)

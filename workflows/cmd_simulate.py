@@ -13,22 +13,21 @@ __all__ = ["register"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from data.load import MEASUREMENTS
+    from data.load import MEASUREMENTS, SCENE, TRUTH
     from data.synth import DEFAULT_SEED, WORLDS, write_world
 
+    from .outdir import check_out
     from .runtime import UserError
 
     if args.world not in WORLDS:
         raise UserError(f"unknown world '{args.world}'; choose from: "
                         + "; ".join(f"{k} ({v})" for k, v in WORLDS.items()))
     seed = DEFAULT_SEED if args.seed is None else args.seed
-    if seed < 0:
-        raise UserError(f"--seed must be an integer >= 0, got {seed}")
+    if not 0 <= seed < 2**32:
+        raise UserError(f"--seed must be an integer in [0, 2**32 - 1], got {seed}")
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"--out {out} is a file, not a folder")
-    if (out / MEASUREMENTS).exists() and not args.force:
-        raise UserError(f"{out / MEASUREMENTS} exists; use --force to overwrite")
+    check_out(out, force=args.force, outputs=(MEASUREMENTS, SCENE, TRUTH),
+              command="simulate")
     folder = write_world(args.world, out, seed=seed)
     print(f"world {args.world!r} (seed {seed}) written to {folder}")
     return 0
@@ -50,5 +49,6 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=None,
                    help="random seed (default: the embedded folders' seed, data.synth."
                    "DEFAULT_SEED)")
-    p.add_argument("--force", action="store_true", help="overwrite an existing dataset")
+    p.add_argument("--force", action="store_true", help="replace the files of a dataset an earlier "
+                   "'beadrod simulate' wrote there (never a file beadrod did not write)")
     p.set_defaults(func=_run)

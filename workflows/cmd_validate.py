@@ -3,7 +3,8 @@
 Bad data raise :class:`data.DataError` naming the file, the line (as a text editor
 numbers it) and the column; the CLI prints it and exits non-zero. Everything the
 protocol leaves out is listed: excluded drive sweeps with their lines and reason,
-unused cells, and the caveats of curve fits.
+unused cells, protocols without a reference Q, and the caveats of curve fits (the
+``warning:`` lines are those a fit logs too).
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ def summary(pd_, dataset, *, convention: str = "weight", elapsed_s: float | None
                      f", delta0 {d0.min() * 1e9:.1f}-{d0.max() * 1e9:.1f} nm): "
                      f"{x.min():.3g} - {x.max():.3g}")
         lines.append(f"Delta f/f0: {pd_.drive_shift.min():.4f} - {pd_.drive_shift.max():.4f}")
+    for warning in getattr(pd_, "warnings", ()):
+        lines.append(f"warning: {warning}")
     for note in dataset.curve_notes:
         lines.append(f"curve: {note}")
     for note in pd_.notes:

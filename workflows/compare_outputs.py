@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ._io import write_json, write_text
+from ._io import atomic_path, write_json, write_text
 
 __all__ = ["data_block", "exclusions", "tension", "tension_jobs", "nuts_eta", "fit_checks",
            "report_extras", "figures", "write_outputs"]
@@ -56,6 +56,8 @@ def data_block(ds: Any) -> dict[str, Any]:
             "n_drive": int(len(ds.drive_shift)),
             "n_excluded": int(len(ds.excluded)) if ds.excluded is not None else 0,
             "excluded": exclusions(ds.excluded),
+            "n_q_missing": int(np.count_nonzero(~np.isfinite(np.asarray(ds.q_ref, float)))),
+            "warnings": [str(w) for w in getattr(ds, "warnings", ())],
             "two_percent_rule": opts.get("two_percent_rule"),
             "shift_reference": opts.get("shift_reference"),
             "young_range_Pa": list(young_range) if young_range is not None else None,
@@ -202,8 +204,8 @@ def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, e
     # that posterior is the prior, drawn here for the figure only (no statistic uses it)
     shift_draws = eta_shift if in_shift else _prior_draws(param, eta_joint.size,
                                                           cfg["seed"] + 11)
-    np.savez(out / "idata" / f"tension_eta_samples_{rung}.npz", shift=shift_draws, q=eta_q,
-             joint=eta_joint)
+    with atomic_path(out / "idata" / f"tension_eta_samples_{rung}.npz") as tmp:
+        np.savez(tmp, shift=shift_draws, q=eta_q, joint=eta_joint)
     return block
 
 

@@ -132,6 +132,45 @@ class _Jobs:
 JOBS = _Jobs()
 
 
+def _write_report(result: dict[str, Any], runs: dict[str, LawRun], inputs: dict[str, Any],
+                  ds: Any, out: Path, figures: bool, workers: int, timings: dict[str, Any],
+                  t_start: float) -> None:
+    from . import compare_outputs
+
+    # LOO-PIT per law and the per-protocol truth of a synthetic world (the report's)
+    result.update(compare_outputs.report_extras(runs, ds))
+    t0 = time.perf_counter()
+    result["figures"] = []
+    if figures:
+        begin(log, "figures", "figures")
+        # the fits' worker count also writes the figures (workflows.figure_pool)
+        result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out,
+                                                    processes=workers)
+        done(log, "figures", "figures done (%.0f s)", time.perf_counter() - t0)
+    timings["figures_s"] = time.perf_counter() - t0
+    timings["total_s"] = time.perf_counter() - t_start
+    result["timings"] = timings
+    begin(log, "report", "tables and report")
+    compare_outputs.write_outputs(result, out)
+    done(log, "report", "tables and report written")
+
+
+def _report_failed(out: Path, runs: dict[str, LawRun], exc: Exception) -> Exception:
+    """The error of a report that failed after the fits were written: the fits stay
+    (laws/, idata/; ``--resume`` reuses them), the traceback goes to the log."""
+    import traceback
+
+    from .runtime import UserError, log_to_file
+
+    if isinstance(exc, UserError | OSError):
+        return exc
+    log_to_file(logging.ERROR, "the report failed\n" + traceback.format_exc())
+    return UserError(f"the fits of {', '.join(runs)} are written ({out / 'laws'}, "
+                     f"{out / 'idata'}), but the report failed: {type(exc).__name__}: "
+                     f"{exc} (traceback in {out / 'beadrod.log'}); fix the cause and rerun "
+                     "with --resume to reuse the fits")
+
+
 def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
                 law_names: list[str] | None = None) -> dict[str, Any]:
     """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write all
@@ -148,16 +187,24 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
 
     t_start = time.perf_counter()
     ds = load_data(cfg)
+    for warning in getattr(ds, "warnings", ()):  # data.process: what a fit must say
+        log.warning("data: %s", warning)
+    if ds.excluded is not None and len(ds.excluded):
+        log.info("data: %d drive sweeps excluded by the 2 %% rule (the report and "
+                 "`beadrod validate` list them)", len(ds.excluded))
     inputs = model_inputs(ds)
     names = law_names if law_names is not None else cfg["laws"]
     specs = model_specs(cfg, names)
     lik = next(iter(specs.values())).likelihood
     jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
     pair = tension_pair(specs)  # (shared, split) law names, if both are compared
-    do_tension = bool(cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"])
+    has_q = int(inputs["q_obs"].shape[0]) > 0
+    do_tension = bool(cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"]
+                      and has_q)
     if cfg["tension"]["enabled"] and pair and not do_tension:
         log.info("tension analysis skipped: it sets eta from Q against eta from the shift, "
-                 "and likelihood.use_q = false leaves Q out")
+                 "and %s", "likelihood.use_q = false leaves Q out"
+                 if not cfg["likelihood"]["use_q"] else "no protocol of the data has a Q")
     if do_tension:
         jobs += compare_outputs.tension_jobs(cfg, out, specs[pair[0]].rung, lik, pair)
     jobs.sort(key=job_order)
@@ -192,20 +239,8 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
             "laws": laws, "preferred": pref, "preferred_reason": why,
             "tension": tension, "config": cfg,
         }
-        # LOO-PIT per law and the per-protocol truth of a synthetic world (the report's)
-        result.update(compare_outputs.report_extras(runs, ds))
-        t0 = time.perf_counter()
-        result["figures"] = []
-        if figures:
-            begin(log, "figures", "figures")
-            # the fits' worker count also writes the figures (workflows.figure_pool)
-            result["figures"] = compare_outputs.figures(runs, inputs, ds, result, out,
-                                                        processes=workers)
-            done(log, "figures", "figures done (%.0f s)", time.perf_counter() - t0)
-        timings["figures_s"] = time.perf_counter() - t0
-        timings["total_s"] = time.perf_counter() - t_start
-        result["timings"] = timings
-        begin(log, "report", "tables and report")
-        compare_outputs.write_outputs(result, out)
-        done(log, "report", "tables and report written")
+        try:
+            _write_report(result, runs, inputs, ds, out, figures, workers, timings, t_start)
+        except Exception as exc:  # noqa: BLE001 - whatever failed, the fits stay
+            raise _report_failed(out, runs, exc) from exc
     return result

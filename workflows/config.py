@@ -13,7 +13,6 @@ from __future__ import annotations
 import copy
 import difflib
 import textwrap
-import tomllib
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +21,7 @@ from models.rungs import DEFAULT_RUNG, FIT_RUNGS
 
 __all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFERENCES",
            "ConfigError", "load_config", "merge", "resolve", "to_toml", "leaf_keys",
-           "describe", "normalise_laws"]
+           "describe", "normalise_laws", "SEED_MAX", "usable_cores"]
 
 # the fit rungs, from the one list of rungs (models.rungs imports no JAX, so the CLI builds
 # its parsers without starting it)
@@ -88,10 +87,11 @@ DESCRIPTIONS: dict[str, str] = {
     "law_files": "Python files that each define one more contact law (NAME, PRIORS, "
                  "force); see docs/adding-a-law.md",
     "rung": "forward model: " + " | ".join(RUNGS),
-    "seed": "random seed (same seed, same numbers)",
+    "seed": "random seed in [0, 2**32 - 1] (same seed, same numbers)",
     "quiet": "no progress output (the log file keeps everything)",
     "workers": "worker processes for the fits: 0 = two, or one per two usable cores (at most 4), "
-               "1 = all in this process; the numbers do not depend on it",
+               "1 = all in this process, at most the usable cores (each is a JAX process of "
+               "1-3 GB); the numbers do not depend on it",
     "sampling.chains": "NUTS chains",
     "sampling.warmup": "NUTS warmup (adaptation) iterations per chain",
     "sampling.samples": "NUTS draws per chain",
@@ -132,6 +132,31 @@ _INT_MIN: dict[str, tuple[int, str]] = {
     "evidence.smc_particles": (10, ""),
     "evidence.smc_seeds": (1, ""),
 }
+
+
+# the largest values that make sense, and why: a count past them is a typo, which would
+# otherwise fail after fitting has started (an integer past 64 bits in JAX) or run for days
+SEED_MAX = 2**32 - 1
+_INT_MAX: dict[str, tuple[int, str]] = {
+    "seed": (SEED_MAX, "a 32-bit seed, what every random generator of the run takes"),
+    "sampling.chains": (1024, "beyond any machine's devices; the draws are held in memory"),
+    "sampling.warmup": (1_000_000, "far past any adaptation that has not converged"),
+    "sampling.samples": (1_000_000, "the draws and their log-likelihoods are held in "
+                                    "memory"),
+    "sampling.extensions": (20, "each doubles the draws: 2**20 times the first run"),
+    "evidence.live_points": (100_000, "the nested sampler holds them all in memory"),
+    "evidence.smc_particles": (1_000_000, "the particles are held in memory"),
+    "evidence.smc_seeds": (1000, "the spread of 1000 runs is as good as known"),
+}
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity where the OS tells it)."""
+    import os
+
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
 
 
 class ConfigError(ValueError):
@@ -211,12 +236,22 @@ def normalise_laws(laws: Any, known: Sequence[str] | None = None) -> list[str] |
         raise ConfigError(f"laws must be a list of law names or one name, got {laws!r}")
     if not laws:
         raise ConfigError("laws is empty: name at least one law (or leave it out for all)")
+    _once("laws", laws)
     if known is not None:
         for name in laws:
             if name not in known:
                 raise ConfigError(f"unknown law '{name}'{_suggest(name, list(known))}; "
                                   f"choose from {', '.join(known)}")
-    return list(dict.fromkeys(laws))  # once each, in the order given
+    return list(laws)
+
+
+def _once(key: str, values: Sequence[Any]) -> None:
+    """Refuse a list that names one entry twice: more often a slip for another entry
+    (``bridge,bridge`` for ``bridge,ns``) than a wish, and it would run or print twice."""
+    twice = [v for i, v in enumerate(values) if v in values[:i]]
+    if twice:
+        raise ConfigError(f"{key} lists {', '.join(repr(v) for v in dict.fromkeys(twice))} "
+                          f"more than once ({', '.join(map(str, values))}): name each once")
 
 
 # words a user may reach for, and the option value they mean
@@ -239,6 +274,18 @@ def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None
         if v < low:
             raise ConfigError(f"{path} must be an integer >= {low}"
                               + (f" ({why})" if why else "") + f", got {v}")
+    for path, (high, why) in _INT_MAX.items():
+        v = _get(cfg, path)
+        if v > high:
+            raise ConfigError(f"{path} must be an integer <= {high} ({why}), got {v}")
+    cores = usable_cores()
+    if cfg["workers"] > cores:
+        # refused, not cut down: the configuration written with the run is the one used
+        raise ConfigError(f"workers must be at most {cores}, the cores this machine lets "
+                          f"the run use (each worker is a JAX process of 1-3 GB, and more "
+                          f"processes than cores only wait for each other), got "
+                          f"{cfg['workers']}; 0 picks the number")
+    _text_values(cfg, "")
     ta = cfg["sampling"]["target_accept"]
     if not 0.0 < ta < 1.0:
         raise ConfigError(f"sampling.target_accept must lie strictly between 0 and 1 "
@@ -255,14 +302,32 @@ def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None
             raise ConfigError(f"unknown evidence method '{m}'"
                               f"{_suggest(str(m), list(EVIDENCE_METHODS))}"
                               f"; choose from {', '.join(EVIDENCE_METHODS)}")
+    _once("evidence.methods", methods)
     cfg["laws"] = normalise_laws(cfg["laws"], known_laws)
     files = cfg["law_files"]
     if not (isinstance(files, list) and all(isinstance(f, str) and f.strip() for f in files)):
         raise ConfigError(f"law_files must be a list of file names, got {files!r}")
+    _once("law_files", [str(Path(f).resolve()) for f in files])
     if cfg["data"] is not None and not cfg["data"].strip():
         raise ConfigError("data must name a dataset folder, got an empty string")
     if not cfg["out"].strip():
         raise ConfigError("out must name a folder, got an empty string")
+
+
+def _text_values(val: Any, path: str) -> None:
+    """Refuse a string that is not Unicode text (a path's bytes that are not UTF-8 arrive
+    as lone surrogates): no TOML or JSON file written with the run could hold it."""
+    if isinstance(val, dict):
+        for key, v in val.items():
+            _text_values(v, f"{path}.{key}" if path else str(key))
+    elif isinstance(val, list):
+        for i, v in enumerate(val):
+            _text_values(v, f"{path}[{i}]")
+    elif isinstance(val, str):
+        try:
+            val.encode("utf-8")
+        except UnicodeEncodeError:
+            raise ConfigError(f"{path}: {val!r} is not UTF-8 text; rename it") from None
 
 
 def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
@@ -279,15 +344,15 @@ def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
 
 
 def load_config(path: str | Path) -> dict[str, Any]:
-    """Read and check a TOML config file (keys as in :data:`DEFAULTS`)."""
+    """Read and check a TOML config file (keys as in :data:`DEFAULTS`); every failure to
+    read it is one line naming it (:func:`models.tomlfile.read_toml`)."""
+    # the scene files' reader (models.tomlfile: imported here, the parser imports no model
+    # module but models.rungs): a folder, non-UTF-8 bytes, nesting too deep are one line
+    from models.tomlfile import read_toml
+
     path = Path(path)
-    try:
-        with open(path, "rb") as fh:
-            cfg = tomllib.load(fh)
-    except FileNotFoundError as exc:
-        raise ConfigError(f"{path}: config file not found") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
+    cfg = read_toml(path, error=ConfigError, what="config file",
+                    hint="`beadrod compare --help-config` lists its keys")
     _check(cfg, DEFAULTS, "", str(path))
     return cfg
 
@@ -327,11 +392,24 @@ def describe(keys: Iterable[str] | None = None) -> str:
     return "\n".join(lines)
 
 
+# TOML basic-string escapes (toml.io, "String"); other control characters as \uXXXX
+_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n",
+            "\f": "\\f", "\r": "\\r"}
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: every character TOML does not allow raw in one
+    (quote, backslash, the control characters) escaped."""
+    return '"' + "".join(
+        _ESCAPES.get(c) or (f"\\u{ord(c):04x}" if ord(c) < 0x20 or ord(c) == 0x7F else c)
+        for c in text) + '"'
+
+
 def _fmt(val: Any) -> str:
     if isinstance(val, bool):
         return "true" if val else "false"
     if isinstance(val, str):
-        return '"' + val.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return _toml_string(val)
     if isinstance(val, (list, tuple)):
         return "[" + ", ".join(_fmt(v) for v in val) + "]"
     return repr(val)

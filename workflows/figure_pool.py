@@ -35,6 +35,10 @@ log = logging.getLogger("beadrod")
 def _init(rc: dict[str, Any]) -> None:
     import matplotlib
 
+    from workflows.runtime import exit_with_parent
+
+    exit_with_parent()  # a parent killed with SIGKILL leaves no orphan writing figures
+
     matplotlib.use("Agg")
     matplotlib.rcParams.update(rc)
 

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ._io import write_json
+from .runtime import UserError
 
 __all__ = ["LawRun", "job_order", "comparison_specs", "load_data", "fit_law",
            "fit_steps", "inputs_digest"]
@@ -246,6 +247,10 @@ def _cached(name: str, key: str, summary_path: Path, idata_path: Path) -> LawRun
     read back; None otherwise (a truncated or foreign file is refitted, not an error)."""
     from .idata_io import load_idata
 
+    for path in (summary_path, idata_path):
+        if path.exists() and not path.is_file():
+            raise UserError(f"{path} is not a file: --resume reads a fit's summary and "
+                            "InferenceData there; remove it or choose another --out")
     if not (summary_path.exists() and idata_path.exists()):
         return None
     try:

@@ -119,17 +119,21 @@ def _no_warnings(result: Mapping) -> str:
 def _data_blocks(data: Mapping) -> list[Block]:
     b: list[Block] = [("h", 2, "Data")]
     rule = data.get("two_percent_rule")
-    b.append(("table", ["item", "value"], [
+    rows = [
         ["source", str(data.get("source", DASH))], ["scene", str(data.get("scene") or DASH)],
         ["hash", str(data.get("hash", DASH))],
         ["protocols", fmt_num(data.get("n_protocols"), ".0f")],
+        ["protocols without a reference Q (not in the likelihood)",
+         fmt_num(data.get("n_q_missing"), ".0f")],
         ["drive sweeps used", fmt_num(data.get("n_drive"), ".0f")],
         ["drive sweeps excluded", fmt_num(data.get("n_excluded"), ".0f")],
         ["2 % rule", DASH if rule is None else ("on" if rule else "off")],
         ["shift relative to", f"the {data['shift_reference']} reference"
          if data.get("shift_reference") else DASH],
-        ["synthetic (ground truth known)", "yes" if data.get("synthetic") else "no"]],
-        [False] * 9))
+        ["synthetic (ground truth known)", "yes" if data.get("synthetic") else "no"]]
+    b.append(("table", ["item", "value"], rows, [False] * len(rows)))
+    for warning in data.get("warnings") or []:  # data.process: what a fit must say
+        b.append(("p", f"Data warning: {warning}."))
     excluded = data.get("excluded") or []
     if excluded:
         b.append(("p", "Excluded drive sweeps, per protocol. The 2 % rule: once a reference "

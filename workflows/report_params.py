@@ -24,6 +24,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 from inference.variables import VARIABLES
 
 from .report_tables import DASH, fmt_num, fmt_pm, is_failed, law_label, pm_decimals, to_float
@@ -168,28 +170,54 @@ def _g(v: float) -> str:
     return f"{v:.4g}"
 
 
+_FAMILIES = ("LogUniform", "Uniform", "LogNormal", "HalfNormal", "Normal")
+"""The distribution families written in their own notation; a subclass (a sampler
+coordinate of its own: inference.coordinates.ScaledNormal, inference.priors.
+LogUniformLogit) is the same prior and is written as its family."""
+
+
+def _family(d: Any) -> str | None:
+    return next((c.__name__ for c in type(d).__mro__ if c.__name__ in _FAMILIES), None)
+
+
+def _args_text(d: Any) -> str:
+    """A distribution's class and parameters as NumPyro names them, in SI units (any
+    class: never its repr, whose object address changes from run to run)."""
+    args = []
+    for k in getattr(d, "arg_constraints", None) or {}:
+        try:
+            v = np.asarray(getattr(d, k), float)
+        except (AttributeError, TypeError, ValueError):
+            continue
+        args.append(f"{k}={_g(float(v))}" if v.size == 1 else f"{k}=<{v.size} values>")
+    base = getattr(d, "base_dist", None)  # a truncated or transformed distribution's
+    of = "" if base is None else f" of {_args_text(base)}"
+    return f"{type(d).__name__}({', '.join(args)}){of}"
+
+
 def prior_text(name: str, d: Any) -> str:
-    """A numpyro distribution in words and the printed unit, e.g. 'Uniform(150, 250) GPa'."""
+    """A numpyro distribution in words and the printed unit, e.g. 'Uniform(150, 250) GPa';
+    a family other than :data:`_FAMILIES` as its class and parameters in SI units."""
     p = param_info(name)
     unit = "" if p.unit == "–" else f" {p.unit}"
-    kind = type(d).__name__
+    kind = _family(d)
     low, high = getattr(d, "low", None), getattr(d, "high", None)
     loc, scale = getattr(d, "loc", None), getattr(d, "scale", None)
-    if low is not None and high is not None:
-        family = "LogUniform" if "LogUniform" in kind else kind
-        return f"{family}({_g(float(low) * p.scale)}, {_g(float(high) * p.scale)}){unit}"
+    if kind in ("Uniform", "LogUniform") and low is not None and high is not None:
+        return f"{kind}({_g(float(low) * p.scale)}, {_g(float(high) * p.scale)}){unit}"
     if kind == "Normal" and p.logged:
         return f"Normal(ln {_g(math.exp(float(loc)))}, {_g(float(scale))})"
     if kind == "Normal" and p.log:
         return (f"ln {p.symbol} ~ Normal(ln {_g(math.exp(float(loc)) * p.scale)}{unit}, "
                 f"{_g(float(scale))})")
-    if kind == "LogNormal":
+    if kind == "LogNormal" and loc is not None:
         return f"LogNormal(ln {_g(math.exp(float(loc)))}, {_g(float(scale))}){unit}"
     if kind == "Normal":
         return f"Normal({_g(float(loc) * p.scale)}, {_g(float(scale) * p.scale)}){unit}"
     if kind == "HalfNormal":
         return f"HalfNormal({_g(float(scale) * p.scale)}){unit}"
-    return repr(d)
+    si = unit if p.scale == 1.0 and not p.log else " (SI units)"
+    return _args_text(d) + si
 
 
 def _plain(text: str) -> str:

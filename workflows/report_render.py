@@ -17,6 +17,7 @@ import re
 from collections.abc import Sequence
 from pathlib import Path
 
+from workflows.markdown import code_fence, md_escape
 from workflows.report_tables import FAILED, markdown_table
 
 __all__ = ["Block", "blocks_to_markdown", "blocks_to_html"]
@@ -28,25 +29,26 @@ Block = tuple
 
 
 def blocks_to_markdown(blocks: Sequence[Block]) -> str:
-    """Markdown; figures are linked by their path relative to the report."""
+    """Markdown; figures are linked by their path relative to the report. Every text is
+    escaped (:func:`workflows.markdown.md_escape`), as :func:`blocks_to_html` escapes it."""
     out: list[str] = []
     for blk in blocks:
         kind = blk[0]
         if kind == "h":
-            out.append("#" * blk[1] + " " + blk[2])
+            out.append("#" * blk[1] + " " + md_escape(blk[2]))
         elif kind == "p":
-            out.append(blk[1])
+            out.append(md_escape(blk[1]))
         elif kind in ("warn", "caution"):
-            out.append(f"> ⚠ {blk[1]}")
+            out.append(f"> ⚠ {md_escape(blk[1])}")
         elif kind == "ul":
-            out.append("\n".join(f"- {item}" for item in blk[1]))
+            out.append("\n".join(f"- {md_escape(item)}" for item in blk[1]))
         elif kind == "table":
             out.append(markdown_table(blk[1], blk[2]))
         elif kind == "fig":
             # the caption once, under the image; the alt text is the figure's name
-            out.append(f"![{Path(blk[1]).stem}]({blk[1]})\n\n*{blk[2]}*")
+            out.append(f"![{md_escape(Path(blk[1]).stem)}]({blk[1]})\n\n*{md_escape(blk[2])}*")
         elif kind == "code":
-            out.append("```json\n" + blk[1] + "\n```")
+            out.append(code_fence(blk[1], "json"))
     return "\n\n".join(out) + "\n"
 
 

@@ -23,6 +23,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from inference.compare import rank_evidence
+from workflows.markdown import md_escape
 
 __all__ = ["DASH", "FAILED", "to_float", "fmt_num", "fmt_pm", "pm_decimals", "is_failed",
            "is_baseline", "status_cell", "law_label", "markdown_table", "ranking",
@@ -108,11 +109,12 @@ def law_label(law: Mapping | None) -> str:
 
 # --------------------------------------------------------------------------- markdown
 def _md_cell(s: str) -> str:
-    return str(s).replace("|", r"\|").replace("\n", " ")
+    return md_escape(s).replace("|", r"\|").replace("\n", " ")
 
 
 def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
-    """A GitHub-flavoured Markdown table (pipes in cells escaped)."""
+    """A GitHub-flavoured Markdown table (cells escaped by workflows.markdown.md_escape,
+    pipes too)."""
     lines = ["| " + " | ".join(_md_cell(h) for h in headers) + " |",
              "|" + "|".join("---" for _ in headers) + "|"]
     lines += ["| " + " | ".join(_md_cell(c) for c in row) + " |" for row in body]

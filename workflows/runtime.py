@@ -22,7 +22,7 @@ from typing import Any, Protocol
 
 __all__ = ["UserError", "LOGGER", "host_devices", "enable_x64", "quiet_libraries",
            "setup_logging", "log_to_queue", "console_handler", "log_to_file", "init_worker",
-           "Display"]
+           "Display", "exit_with_parent"]
 
 LOGGER = "beadrod"
 LOG_FILE = "beadrod.log"
@@ -112,6 +112,36 @@ class Display(Protocol):
         """Print one line without breaking the display."""
 
 
+def exit_with_parent(poll_s: float = 0.5) -> None:
+    """In a worker process: end it when its parent dies. A parent killed with SIGKILL
+    cannot shut its pool down, and its workers would run on as orphans; an orphan is
+    adopted by another process, so its parent id changes, which a daemon thread watches."""
+    import threading
+    import time
+
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
+class _LogFile(logging.FileHandler):
+    """The run's log file. A write that fails (a full disk, the folder gone read-only)
+    stops the file log with one line on the console instead of a traceback per record;
+    the error that follows names the folder."""
+
+    def handleError(self, record: logging.LogRecord) -> None:  # noqa: N802 (logging's name)
+        exc = sys.exc_info()[1]
+        logging.getLogger(LOGGER).removeHandler(self)
+        sys.stderr.write(f"beadrod: the log file {self.baseFilename} can no longer be "
+                         f"written ({getattr(exc, 'strerror', None) or exc}); logging to "
+                         "the console only\n")
+
+
 class _Console(logging.Handler):
     """stderr, looked up at every record (so redirections and test captures work), through
     the active progress display if there is one."""
@@ -154,7 +184,11 @@ def setup_logging(out: Path | None, quiet: bool) -> logging.Logger:
     _reset(logger)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        fh = logging.FileHandler(out / LOG_FILE)
+        try:
+            fh = _LogFile(out / LOG_FILE)
+        except OSError as exc:
+            raise UserError(f"cannot write to the output folder {out}: "
+                            f"{exc.strerror or exc}") from None
         fh.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
         setattr(fh, _MARK, True)
         logger.addHandler(fh)
@@ -195,7 +229,9 @@ def log_to_queue(queue: Any) -> None:
 
 def init_worker(n_devices: int, queue: Any) -> None:
     """Everything a worker process needs before its first job: the same set-up as the
-    command line's (devices before the backend starts, float64, warnings, logging)."""
+    command line's (devices before the backend starts, float64, warnings, logging), and
+    its end when the parent dies."""
+    exit_with_parent()
     host_devices(n_devices)  # inherited from the parent's environment in practice
     enable_x64()
     quiet_libraries()
