@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from models.tomlfile import describe_value
+from beadrod.models.tomlfile import describe_value
 
 from .extract import extract_resonance, read_curve
 from .io import read_csv_table, write_bytes, write_json, write_text
@@ -77,7 +77,7 @@ def scene_limits(scene: Any) -> Limits:
     """Plausibility limits from the scene (:mod:`data.limits`): the sweep band, the
     amplitude ceiling AMPLITUDE_LIMIT_FACTOR x (Hertz delta0 under the scene's load),
     the drive range and the scene's bound on Q."""
-    from models import hertz, scenes
+    from beadrod.models import hertz, scenes
 
     delta0 = float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
                                         radius=float(scene.radius)))
@@ -89,7 +89,7 @@ def scene_limits(scene: Any) -> Limits:
 def load_scene_file(path: Path) -> tuple[Any, dict]:
     """(Scene, scene dict) from a scene TOML; any failure becomes a one-line
     :class:`DataError` that names the file once."""
-    from models import scenes
+    from beadrod.models import scenes
 
     if not path.exists():
         raise DataError(f"{path}: scene file is missing (a dataset folder needs {SCENE})")

@@ -50,7 +50,7 @@ TWO_PERCENT = 0.02
 
 def static_overlap_weight(scene: Any) -> float:
     """delta0 [m] from the Hertz law under the scene's load (models.hertz.static_overlap)."""
-    from models import hertz
+    from beadrod.models import hertz
 
     return float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
                                       radius=float(scene.radius)))
@@ -59,7 +59,7 @@ def static_overlap_weight(scene: Any) -> float:
 def overlap_from_f0(f0: np.ndarray, scene: Any) -> np.ndarray:
     """delta0 [m] implied by measured linear resonances f0 [Hz] under the scene's load
     (models.hertz.overlap_from_frequency: 3 F0 / (2 m omega0^2))."""
-    from models import hertz
+    from beadrod.models import hertz
 
     return np.asarray(hertz.overlap_from_frequency(np.asarray(f0, np.float64), float(scene.load),
                                                    float(scene.mass)), dtype=np.float64)

@@ -73,8 +73,8 @@ def implied_f0_range(scene: Any) -> tuple[float, float] | None:
     prior ranges (module docstring); None when no finite value results."""
     import jax
 
-    from models import hertz, jkr_contact
-    from models.law import GAMMA, YOUNG
+    from beadrod.models import hertz, jkr_contact
+    from beadrod.models.law import GAMMA, YOUNG
 
     nu = float(scene.bead_material.poisson)
     same = 2.0 * (1.0 - nu * nu)  # E* of bead and rod of one material: E / (2 (1 - nu^2))
@@ -105,7 +105,7 @@ def _outside(f0: float, rng: tuple[float, float] | None) -> bool:
 
 def _material_key(scene_file: Path) -> str:
     """The bead's material table name in the scene file, for the message."""
-    from models.tomlfile import read_toml
+    from beadrod.models.tomlfile import read_toml
 
     try:
         name = read_toml(scene_file)["bead"]["material"]

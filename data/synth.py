@@ -103,7 +103,7 @@ def _rounded(obj: Any, digits: int = 12) -> Any:
 
 
 def _paper_scene(world: str = "paper_like") -> tuple[Any, dict]:
-    from models import scenes
+    from beadrod.models import scenes
 
     d = scenes.scene_to_dict(scenes.builtin_scene("paper"))
     d["name"] = world
@@ -118,7 +118,7 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     import jax
     import jax.numpy as jnp
 
-    from models import hertz, viscoelastic
+    from beadrod.models import hertz, viscoelastic
 
     cfg = _PAPER_LIKE
     rng = np.random.default_rng(seed)
@@ -239,7 +239,7 @@ def _hbm_sweeps(zeta: np.ndarray, drive: np.ndarray, down: np.ndarray, cfg: dict
     import jax
     import jax.numpy as jnp
 
-    from models import hbm, oscillator
+    from beadrod.models import hbm, oscillator
 
     lo, hi, step = cfg["omega_grid"]
     om = np.arange(lo, hi + 0.5 * step, step)

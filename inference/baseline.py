@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpyro
 import numpyro.distributions as dist
 
-from models import materials
+from beadrod.models import materials
 
 from .likelihood import observe_logq, observe_shift
 from .priors import prior

@@ -50,7 +50,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.extend.core import Literal
 
-from models.p_cells import cubic, cubic_slope, hermite
+from beadrod.models.p_cells import cubic, cubic_slope, hermite
 
 from .chosen import chosen
 from .programs import one_shot

@@ -16,7 +16,7 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
-from models.registry import get_law, law_names
+from beadrod.models.registry import get_law, law_names
 
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
            "design_inputs", "simulate", "scene_quantities", "sweep_layout", "SWEEP_LAYOUT_KEYS",

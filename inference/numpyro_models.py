@@ -87,9 +87,9 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
-from models import hertz
-from models.law import RungUnavailable, sampler_site
-from models.registry import FIT_RUNGS, get_law, law_names
+from beadrod.models import hertz
+from beadrod.models.law import RungUnavailable, sampler_site
+from beadrod.models.registry import FIT_RUNGS, get_law, law_names
 
 from .baseline import baseline_curve, baseline_model, nuisance_q, observe_drive
 from .likelihood import observe_logq

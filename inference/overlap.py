@@ -22,7 +22,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 from numpyro.distributions.util import promote_shapes
 
-from models.registry import get_law
+from beadrod.models.registry import get_law
 
 __all__ = ["log_overlap", "log_overlap_and_slope", "invert_log_overlap", "MeasuredF0"]
 

@@ -44,7 +44,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints, transforms
 from numpyro.distributions.transforms import biject_to
 
-from models.law import Prior
+from beadrod.models.law import Prior
 
 from .coordinates import ScaledNormal
 
@@ -112,7 +112,7 @@ def prior(name: str, overrides: dict[str, dist.Distribution] | None = None) -> d
         return overrides[name]
     if name in PRIORS:
         return PRIORS[name]
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     for law in laws():
         if name in law.param_names:

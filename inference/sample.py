@@ -26,7 +26,7 @@ import numpy as np
 import numpyro
 from numpyro.infer import MCMC, NUTS, init_to_median
 
-from models.law import sampler_site
+from beadrod.models.law import sampler_site
 
 from .draws import fit_draws, observed_data, sample_stats
 from .evidence import latent_site_names

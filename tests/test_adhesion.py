@@ -6,7 +6,7 @@ import jax
 import numpy as np
 import pytest
 
-from models import adhesion
+from beadrod.models import adhesion
 
 R_BEAD, RHO, NU, G, GAMMA, Z0 = 7.938e-3, 7700.0, 0.27, 9.80665, 0.7, 0.4e-9
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * RHO

@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from models.backbone import backbone_shift, lindstedt_shift, powerlaw_orbit
-from models.backbone_table import (
+from beadrod.models.backbone import backbone_shift, lindstedt_shift, powerlaw_orbit
+from beadrod.models.backbone_table import (
     SPEC,
     X_MAX,
     backbone_shift_fast,
     contact_loss_amplitude,
     load_table,
 )
-from models.surrogate import chebyshev_nodes, spline_coefficients, to_chebyshev
+from beadrod.models.surrogate import chebyshev_nodes, spline_coefficients, to_chebyshev
 
 KINK_N = np.array([1.25, 1.5, 2.0, 3.0])
 KINK_OFF = np.array([-1e-3, -1e-5, -1e-6, 1e-6, 1e-5, 1e-3])

@@ -4,7 +4,7 @@ import csv
 
 import pytest
 
-from workflows import bench_physics
+from beadrod.workflows import bench_physics
 
 
 @pytest.fixture

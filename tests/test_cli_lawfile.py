@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflows.cli import main
+from beadrod.workflows.cli import main
 
 LAW_FILE = str(Path(__file__).parent / "laws" / "hertz_scratch.py")
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1", "--quiet",
@@ -86,8 +86,8 @@ def test_compare_file_law_reproduces_builtin_hertz(tmp_path):
 def test_rungs_fits_the_file_law_by_default():
     # a law file's law has no fast first order, yet `rungs --law-file` fits it: the file
     # asked for it (built-in laws without a fast path are left out, with the reason)
-    from workflows import lawfiles
-    from workflows.rungs import rung_laws
+    from beadrod.workflows import lawfiles
+    from beadrod.workflows.rungs import rung_laws
 
     lawfiles.load([LAW_FILE])
     names, left = rung_laws(["first_order", "backbone"])

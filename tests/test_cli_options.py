@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from workflows.cli import EXIT_PIPE, main
+from beadrod.workflows.cli import EXIT_PIPE, main
 
 ROOT = Path(__file__).parents[1]
 LAW_FILE = str(ROOT / "tests" / "laws" / "hertz_scratch.py")
@@ -61,8 +61,8 @@ def test_every_scene_quantity_is_checked_by_the_scenes_own_rules():
     """One place: each scene quantity goes into the scene's layout and the scene's checks
     run on it, so a value past its key's bounds (models.scenes.BOUNDS) is refused with
     that bound's reason, and a value inside passes."""
-    from models.nominal import SCENE_PATHS, check_scene_values
-    from models.scenes import BOUNDS, builtin_scene
+    from beadrod.models.nominal import SCENE_PATHS, check_scene_values
+    from beadrod.models.scenes import BOUNDS, builtin_scene
 
     scene = builtin_scene("paper")
     for name, path in SCENE_PATHS.items():
@@ -192,7 +192,7 @@ def test_config_that_is_a_folder_or_not_utf8_is_one_line(capsys, tmp_path):
 def test_a_closed_pipe_ends_the_command_quietly(command):
     """`beadrod laws | head -1`: the reader closes the pipe before the command writes
     (`beadrod scene` prints the same way, after 20 s of computing)."""
-    code = f"import sys; from workflows.cli import main; sys.exit(main({command!r}))"
+    code = f"import sys; from beadrod.workflows.cli import main; sys.exit(main({command!r}))"
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, cwd=ROOT)
     proc.stdout.close()  # long before the imports end and the command prints
@@ -202,7 +202,7 @@ def test_a_closed_pipe_ends_the_command_quietly(command):
 
 
 def test_resolved_config_is_valid_toml_whatever_the_paths_hold():
-    from workflows.config import DEFAULTS, merge, to_toml
+    from beadrod.workflows.config import DEFAULTS, merge, to_toml
 
     odd = "dir\nwith\tcontrols\r\x00\x01\x1f\x7f \"quotes\" \\back\\ é"
     cfg = merge(DEFAULTS, {"out": odd, "data": "a\nb", "law_files": [odd]})
@@ -212,7 +212,7 @@ def test_resolved_config_is_valid_toml_whatever_the_paths_hold():
 
 
 def test_a_path_that_is_not_utf8_is_refused():
-    from workflows.config import ConfigError, resolve
+    from beadrod.workflows.config import ConfigError, resolve
 
     with pytest.raises(ConfigError, match="out: .* not UTF-8"):
         resolve(None, {"out": os.fsdecode(b"out\xff")})
@@ -224,9 +224,9 @@ def test_a_path_that_is_not_utf8_is_refused():
 def test_every_prior_is_described_in_words():
     import numpyro.distributions as dist
 
-    from inference.priors import PRIORS, prior
-    from models.registry import laws
-    from workflows.report_params import prior_text
+    from beadrod.inference.priors import PRIORS, prior
+    from beadrod.models.registry import laws
+    from beadrod.workflows.report_params import prior_text
 
     texts = {name: prior_text(name, d) for name, d in PRIORS.items()}
     texts |= {p.name: prior_text(p.name, prior(p.name)) for law in laws() for p in law.params}

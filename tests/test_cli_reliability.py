@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflows.cli import build_parser, main
-from workflows.config import DEFAULTS, DESCRIPTIONS, leaf_keys
+from beadrod.workflows.cli import build_parser, main
+from beadrod.workflows.config import DEFAULTS, DESCRIPTIONS, leaf_keys
 
 ROOT = Path(__file__).parents[1]
 TINY = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1", "--workers", "1",
@@ -44,9 +44,10 @@ def _subparser(name: str):
 
 def test_building_the_parser_imports_no_jax():
     # models.rungs (the one list of rungs, plain Python) is the only model module it reads
-    code = ("import sys; from workflows.cli import build_parser; build_parser(); "
-            "print([m for m in sys.modules if m.split('.')[0] in ('jax', 'numpyro', 'arviz', "
-            "'pandas', 'models', 'inference', 'data') and m not in ('models', 'models.rungs')])")
+    code = ("import sys; from beadrod.workflows.cli import build_parser; build_parser(); "
+            "print([m for m in sys.modules if m.removeprefix('beadrod.').split('.')[0] in "
+            "('jax', 'numpyro', 'arviz', 'pandas', 'models', 'inference', 'data') "
+            "and m not in ('beadrod.models', 'beadrod.models.rungs')])")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                        timeout=120)
     assert r.returncode == 0, r.stderr
@@ -114,9 +115,9 @@ BAD_CONFIGS = [
 @pytest.mark.parametrize("text,message", BAD_CONFIGS)
 def test_bad_config_is_one_line_before_anything_runs(tmp_path, capsys, monkeypatch, text,
                                                     message):
-    import workflows.comparison
+    import beadrod.workflows.comparison as comparison
 
-    monkeypatch.setattr(workflows.comparison, "run_compare",
+    monkeypatch.setattr(comparison, "run_compare",
                         lambda *a, **k: pytest.fail("a bad config was accepted"))
     out = tmp_path / "out"
     # compare: the laws come from the file (fit's --law would override them)
@@ -136,9 +137,8 @@ def test_bad_sampling_flags_are_refused(tmp_path, capsys, flags, message):
 
 
 def test_unknown_law_refused_before_the_data_are_loaded(tmp_path, capsys, monkeypatch):
-    import workflows.comparison as comparison
-    import workflows.pipeline as pipeline
-
+    import beadrod.workflows.comparison as comparison
+    import beadrod.workflows.pipeline as pipeline
     def no_data(cfg):
         raise AssertionError("the data were loaded before the law names were checked")
 
@@ -244,7 +244,7 @@ def test_shift_past_a_tables_upper_end_is_hertz_not_the_held_value(capsys, law, 
     raised ZeroDivisionError). The fast path now carries the departure on as the law
     approaches Hertz's (HERTZ_DECAY); checked against Hertz's backbone by models.backbone
     (F ~ delta^(3/2), its own quadrature)."""
-    from models.backbone import backbone_shift
+    from beadrod.models.backbone import backbone_shift
 
     x = [1.5]
     assert main(["shift", "--law", law, "--method", "backbone", "--x", *map(str, x),
@@ -272,8 +272,8 @@ def test_a_scene_without_adhesion_is_described_not_refused(tmp_path, capsys):
     still refused."""
     import jax
 
-    from models.scenes import load_scene
-    from workflows.compare_figures import theory_curves
+    from beadrod.models.scenes import load_scene
+    from beadrod.workflows.compare_figures import theory_curves
 
     text = Path("models/scenes/paper.toml").read_text()
     toml = tmp_path / "smooth.toml"
@@ -297,7 +297,7 @@ def test_a_scene_without_adhesion_is_described_not_refused(tmp_path, capsys):
 def test_progress_bar_on_a_terminal_and_plain_lines_elsewhere(tmp_path):
     import io
 
-    from workflows import progress, runtime
+    from beadrod.workflows import progress, runtime
 
     log = logging.getLogger("beadrod")
 
@@ -330,7 +330,7 @@ def test_progress_bar_on_a_terminal_and_plain_lines_elsewhere(tmp_path):
 def test_quiet_shows_no_progress(tmp_path):
     import io
 
-    from workflows import progress, runtime
+    from beadrod.workflows import progress, runtime
 
     runtime.setup_logging(tmp_path, quiet=True)
     stream = io.StringIO()
@@ -349,15 +349,16 @@ def _workflows_imports() -> dict[str, set[str]]:
         deps = set()
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
-                mod = node.module or ""
+                mod = (node.module or "").removeprefix("beadrod.")
                 if node.level == 1:
                     names = [mod] if mod else [a.name for a in node.names]
                     deps |= {f"workflows.{n.split('.')[0]}" for n in names}
                 elif mod.startswith("workflows."):
                     deps.add(".".join(mod.split(".")[:2]))
             elif isinstance(node, ast.Import):
-                deps |= {".".join(a.name.split(".")[:2]) for a in node.names
-                         if a.name.startswith("workflows.")}
+                names = [a.name.removeprefix("beadrod.") for a in node.names]
+                deps |= {".".join(n.split(".")[:2]) for n in names
+                         if n.startswith("workflows.")}
         graph[f"workflows.{path.stem}"] = deps - {f"workflows.{path.stem}"}
     return graph
 
@@ -387,7 +388,7 @@ def test_parallel_runs_what_it_is_handed_and_workflows_has_no_cycle():
 
 def test_no_library_noise_and_a_failed_run_logs_its_error(tmp_path):
     out = tmp_path / "o"
-    argv = [sys.executable, "-m", "workflows.cli", "fit", "--law", "hertz", "--out", str(out),
+    argv = [sys.executable, "-m", "beadrod.workflows.cli", "fit", "--law", "hertz", "--out", str(out),
             "--data", str(tmp_path / "missing"), *TINY]
     r = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert r.returncode == 2
@@ -400,7 +401,7 @@ def test_no_library_noise_and_a_failed_run_logs_its_error(tmp_path):
 
 
 def _gate_always_fails(monkeypatch):
-    from inference import diagnostics
+    from beadrod.inference import diagnostics
 
     orig = diagnostics.check
 
@@ -411,7 +412,7 @@ def _gate_always_fails(monkeypatch):
 
 
 def _bridge_fails_for(monkeypatch, law: str):
-    from inference import bridge
+    from beadrod.inference import bridge
 
     orig = bridge.bridge_sampling_log_z
 
@@ -486,7 +487,7 @@ def runs(tmp_path_factory):
                             "--allow-failed"])
     stages["force"]["files"] = sorted(str(p.relative_to(out)) for p in out.rglob("*")
                                       if p.is_file())
-    from workflows.idata_io import load_idata
+    from beadrod.workflows.idata_io import load_idata
 
     idata = load_idata(out / "idata" / "hertz.nc")
     stages["force"]["groups"] = {g: sorted(getattr(idata, g).data_vars) for g in
@@ -557,9 +558,9 @@ def test_cache_key_follows_the_model_inputs():
     option that changes what enters the model."""
     import copy
 
-    from inference.likelihood import model_inputs
-    from workflows.comparison import model_specs
-    from workflows.pipeline import _cache_key, load_data
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.workflows.comparison import model_specs
+    from beadrod.workflows.pipeline import _cache_key, load_data
 
     def key(cfg, spec=None):
         ds = load_data(cfg)
@@ -584,7 +585,7 @@ def test_cache_key_follows_the_model_inputs():
 def test_code_digest_follows_the_code(tmp_path):
     """A fit made by other code (a changed law file, a changed package file) has another
     key: the digest covers the packages and the law's own file."""
-    from workflows.pipeline import code_digest
+    from beadrod.workflows.pipeline import code_digest
 
     law_file = tmp_path / "law.py"
     law_file.write_text("NAME = 'a'\n")
@@ -612,11 +613,11 @@ def test_a_value_is_checked_by_the_laws_own_parameter(tmp_path):
     """What a parameter's values may be is the law's parameter's (models.law.Param: its
     domain and its quantity's physical bounds), not a list by name: a file law's own
     exponent n is not held to the power law's (1, 3], its E is held to E's bounds."""
-    from inference.likelihood import scene_quantities
-    from models.lawfile import load_law_file
-    from models.registry import get_law
-    from models.scenes import builtin_scene
-    from workflows.cmd_shift import check_param
+    from beadrod.inference.likelihood import scene_quantities
+    from beadrod.models.lawfile import load_law_file
+    from beadrod.models.registry import get_law
+    from beadrod.models.scenes import builtin_scene
+    from beadrod.workflows.cmd_shift import check_param
 
     power = get_law("powerlaw")
     with pytest.raises(ValueError, match=r"n = 1: the power-law exponent is defined for n "

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from inference.compare import log_bayes_factor, loo_pit_summary, rank_evidence
+from beadrod.inference.compare import log_bayes_factor, loo_pit_summary, rank_evidence
 
 
 def _e(name, z, err, ok=True, baseline=False):

@@ -4,7 +4,7 @@ import tomllib
 
 import pytest
 
-from workflows.config import DEFAULTS, ConfigError, load_config, resolve, to_toml
+from beadrod.workflows.config import DEFAULTS, ConfigError, load_config, resolve, to_toml
 
 
 def test_flags_win_over_file(tmp_path):
@@ -74,7 +74,7 @@ def test_booleans_are_not_numbers_and_ranges_are_checked(tmp_path):
 
 
 def test_every_key_is_described_once():
-    from workflows.config import DESCRIPTIONS, describe, leaf_keys
+    from beadrod.workflows.config import DESCRIPTIONS, describe, leaf_keys
 
     assert set(DESCRIPTIONS) == set(leaf_keys())
     text = describe(["likelihood.use_q", "sampling.warmup"])

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from data.load import dump_toml, load_dataset
-from data.process import load_default, overlap_from_f0, process, static_overlap_weight
+from beadrod.data.load import dump_toml, load_dataset
+from beadrod.data.process import load_default, overlap_from_f0, process, static_overlap_weight
 
 HEADER = "protocol,step,kind,direction,drive_voltage_V,f_res_Hz,amplitude_m,q_factor"
 # Protocol A: Q_ref = 40, V_ref = 0.01 V, delta_ref = 5e-10 m, so a linear response
@@ -30,7 +30,7 @@ ROWS = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from models import scenes
+    from beadrod.models import scenes
 
     return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
 

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from data.load import dump_toml, load_dataset
-from data.schema import DataError
+from beadrod.data.load import dump_toml, load_dataset
+from beadrod.data.schema import DataError
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = "protocol,step,kind,direction,drive_voltage_V,f_res_Hz,amplitude_m,q_factor"
@@ -34,7 +34,7 @@ CURVE_HEADER = HEADER + ",curve"
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from models import scenes
+    from beadrod.models import scenes
 
     return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
 
@@ -79,11 +79,11 @@ def test_data_does_not_import_workflows():
 
 
 def test_writing_a_dataset_imports_no_workflows(tmp_path):
-    code = ("import sys, data\n"
-            "from data.load import load_dataset, write_dataset\n"
+    code = ("import sys\n"
+            "from beadrod.data.load import load_dataset, write_dataset\n"
             f"ds = load_dataset({str(ROOT / 'data' / 'paper_like')!r})\n"
             f"write_dataset({str(tmp_path / 'copy')!r}, ds.table, ds.scene_dict, ds.truth)\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'workflows'))\n")
+            "print(sorted(m for m in sys.modules if 'workflows' in m.split('.')[:2]))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=ROOT, timeout=300, check=True).stdout
     assert out.strip() == "[]"
@@ -92,15 +92,15 @@ def test_writing_a_dataset_imports_no_workflows(tmp_path):
 
 
 def test_workflows_io_reexports_data_io():
-    from data import io
-    from workflows import _io
+    from beadrod.data import io
+    from beadrod.workflows import _io
 
     for name in ("atomic_path", "write_text", "write_bytes", "write_json"):
         assert getattr(_io, name) is getattr(io, name)
 
 
 def test_write_json_is_strict_and_atomic(tmp_path):
-    from data.io import atomic_path, write_json
+    from beadrod.data.io import atomic_path, write_json
 
     p = write_json(tmp_path / "a.json", {"x": float("nan"), "y": [1.0, float("inf")], "z": 2})
     assert json.loads(p.read_text()) == {"x": None, "y": [1.0, None], "z": 2}
@@ -339,7 +339,7 @@ def test_scene_or_table_that_is_a_folder(tmp_path, scene_text):
 
 
 def test_unused_drive_q_is_noted(tmp_path, scene_text):
-    from data.process import process
+    from beadrod.data.process import process
 
     lines = [HEADER, GOOD[0], set_cell(GOOD[1], "q_factor", "33.0"), *GOOD[2:]]
     p = process(load_dataset(folder(tmp_path, scene_text, lines)))
@@ -349,7 +349,7 @@ def test_unused_drive_q_is_noted(tmp_path, scene_text):
 def test_validate_lists_notes_and_excluded_lines(tmp_path, scene_text, capsys):
     import argparse
 
-    from workflows import cmd_validate
+    from beadrod.workflows import cmd_validate
 
     lines = [HEADER, GOOD[0], set_cell(GOOD[1], "q_factor", "33.0"), *GOOD[2:]]
     lines += ["B,2,reference,up,0.01,2580.0,4.0e-10,30.0", "B,3,drive,up,0.8,2570.0,3.0e-8,"]

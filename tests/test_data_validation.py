@@ -5,8 +5,8 @@ import argparse
 
 import pytest
 
-from data.load import dump_toml, load_dataset
-from data.schema import DataError
+from beadrod.data.load import dump_toml, load_dataset
+from beadrod.data.schema import DataError
 
 HEADER = "protocol,step,kind,direction,drive_voltage_V,f_res_Hz,amplitude_m,q_factor"
 GOOD = [
@@ -21,7 +21,7 @@ GOOD = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from models import scenes
+    from beadrod.models import scenes
 
     return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
 
@@ -180,7 +180,7 @@ def test_missing_scene(tmp_path):
 
 
 def test_validate_command_reports_bad_data(tmp_path, scene_text):
-    from workflows import cmd_validate
+    from beadrod.workflows import cmd_validate
 
     parser = argparse.ArgumentParser()
     cmd_validate.register(parser.add_subparsers())

@@ -15,10 +15,10 @@ import types
 import numpy as np
 import pytest
 
-from data.load import dump_toml, load_dataset
-from data.process import process
-from data.schema import DataError
-from workflows.cli import main
+from beadrod.data.load import dump_toml, load_dataset
+from beadrod.data.process import process
+from beadrod.data.schema import DataError
+from beadrod.workflows.cli import main
 
 HEADER = "protocol,step,kind,direction,drive_voltage_V,f_res_Hz,amplitude_m,q_factor"
 GOOD = [
@@ -33,7 +33,7 @@ GOOD = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from models import scenes
+    from beadrod.models import scenes
 
     return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
 
@@ -92,7 +92,7 @@ def test_dataset_without_a_q_column_loads_and_says_so(tmp_path, scene_text, caps
 
 
 def _tiny(q_ref):
-    from models.scenes import builtin_scene
+    from beadrod.models.scenes import builtin_scene
 
     return types.SimpleNamespace(
         f0=np.array([2650.0, 2700.0, 2680.0]), q_ref=np.asarray(q_ref, float),
@@ -112,8 +112,8 @@ def test_missing_q_is_masked_out_of_the_likelihood_term_by_term(law):
     from numpyro import handlers
     from numpyro.infer.util import log_density
 
-    from inference.likelihood import model_inputs
-    from inference.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.numpyro_models import ModelSpec, build_model
 
     model = build_model(ModelSpec(law, fold=False))
     full = model_inputs(_tiny([30.0, 40.0, 50.0]))
@@ -140,8 +140,8 @@ def test_missing_q_is_masked_out_of_the_likelihood_term_by_term(law):
 
 
 def test_report_data_section_counts_protocols_without_q(tmp_path, scene_text):
-    from workflows.compare_outputs import data_block
-    from workflows.report import _data_blocks
+    from beadrod.workflows.compare_outputs import data_block
+    from beadrod.workflows.report import _data_blocks
 
     d = folder(tmp_path, scene_text, [HEADER, set_cell(GOOD[0], "q_factor", "nan"), *GOOD[1:]])
     block = data_block(process(load_dataset(d)))
@@ -261,8 +261,8 @@ def test_embedded_worlds_and_builtin_scenes_pass_the_unit_check():
 
     import pandas as pd
 
-    from data.scene_check import F0_TOLERANCE, check_scene_units, implied_f0_range
-    from models import scenes
+    from beadrod.data.scene_check import F0_TOLERANCE, check_scene_units, implied_f0_range
+    from beadrod.models import scenes
 
     root = Path(__file__).resolve().parents[1] / "data"
     for world in ("paper_like", "hertz_dynamics"):
@@ -312,7 +312,7 @@ def test_truth_nested_too_deeply_is_one_line(tmp_path, scene_text):
 def test_truth_of_the_embedded_worlds_passes():
     from pathlib import Path
 
-    from data.load import TRUTH, load_truth
+    from beadrod.data.load import TRUTH, load_truth
 
     root = Path(__file__).resolve().parents[1] / "data"
     for world in ("paper_like", "hertz_dynamics"):

@@ -6,7 +6,7 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
-from inference.sample import run_nuts
+from beadrod.inference.sample import run_nuts
 
 # run_nuts labels its output by the data's protocols and sweeps: one of each
 ONE = {"f0": np.ones(1), "q_idx": np.zeros(0, int), "amplitude": np.ones(1),

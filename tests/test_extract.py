@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from data.extract import extract_resonance, read_curve
-from data.schema import DataError
+from beadrod.data.extract import extract_resonance, read_curve
+from beadrod.data.schema import DataError
 
 
 def lorentzian(f, f0, q, peak=1e-8):

@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.ticker import FuncFormatter  # noqa: E402
 
-from workflows.figure_pool import FigureWriter  # noqa: E402
+from beadrod.workflows.figure_pool import FigureWriter  # noqa: E402
 
 
 def _figure(label: str = "Delta f/f0 [-]"):
@@ -29,7 +29,7 @@ def _figure(label: str = "Delta f/f0 [-]"):
 
 
 def test_pool_writes_the_same_pixels_as_one_process(tmp_path, monkeypatch):
-    from workflows import figure_pool
+    from beadrod.workflows import figure_pool
 
     unpickled = []
     monkeypatch.setattr(figure_pool.log, "debug", lambda *a: unpickled.append(a[1]))

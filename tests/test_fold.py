@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from numpyro.infer.util import log_density
 
-from inference import fold as F
-from inference.likelihood import model_inputs
-from inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
-from inference.priors import law_prior
-from inference.residual_fold import ResidualFold
-from models.registry import get_law, law_names
-from workflows.config import DEFAULTS
-from workflows.pipeline import load_data
+from beadrod.inference import fold as F
+from beadrod.inference.likelihood import model_inputs
+from beadrod.inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
+from beadrod.inference.priors import law_prior
+from beadrod.inference.residual_fold import ResidualFold
+from beadrod.models.registry import get_law, law_names
+from beadrod.workflows.config import DEFAULTS
+from beadrod.workflows.pipeline import load_data
 
 
 @pytest.fixture(scope="module")
@@ -148,9 +148,9 @@ def test_a_kink_is_refined_or_left_to_the_exact_curve():
 def test_known_overlap_map_is_used_only_at_its_f0():
     """MeasuredF0 with the map precomputed at the observed f0 (the fold's values) gives
     that density there and evaluates the map at any other value."""
-    from inference.likelihood import scene_quantities
-    from inference.overlap import MeasuredF0, log_overlap_and_slope
-    from models.scenes import builtin_scene
+    from beadrod.inference.likelihood import scene_quantities
+    from beadrod.inference.overlap import MeasuredF0, log_overlap_and_slope
+    from beadrod.models.scenes import builtin_scene
 
     law = get_law("jkr")
     kw = law.resolve(scene_quantities(builtin_scene("paper")), {"young": 200e9, "gamma": 0.7})

@@ -27,10 +27,10 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from data.load import load_dataset
-from data.process import process
-from data.schema import DataError
-from models.scenes import SceneError, load_scene
+from beadrod.data.load import load_dataset
+from beadrod.data.process import process
+from beadrod.data.schema import DataError
+from beadrod.models.scenes import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLD = ROOT / "data" / "paper_like"
@@ -146,8 +146,8 @@ def _one_line(exc: Exception) -> None:
 
 def _load_all(folder: Path) -> None:
     """Load, process, summarise and build the model inputs, or refuse in one line."""
-    from inference.likelihood import model_inputs
-    from workflows.cmd_validate import summary
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.workflows.cmd_validate import summary
 
     try:
         ds = load_dataset(folder)

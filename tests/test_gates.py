@@ -22,8 +22,8 @@ def _worlds():
 @pytest.fixture(scope="module")
 def datasets(tmp_path_factory):
     """Processed datasets by (world, seed); seed None = the embedded folder."""
-    import data as bd
-    from data.synth import write_world
+    from beadrod import data as bd
+    from beadrod.data.synth import write_world
 
     cache = {}
 
@@ -38,7 +38,7 @@ def datasets(tmp_path_factory):
 
 
 def _model_names():
-    from workflows.pipeline import default_model_names
+    from beadrod.workflows.pipeline import default_model_names
 
     return default_model_names()
 
@@ -47,13 +47,13 @@ def _model_names():
 @pytest.mark.parametrize("world,seed", _worlds(),
                          ids=[f"{w}-{'embedded' if s is None else s}" for w, s in _worlds()])
 def test_every_default_model_passes_its_gate(datasets, world, seed):
-    from inference import diagnostics
-    from inference.likelihood import model_inputs
-    from inference.numpyro_models import build_model
-    from inference.sample import run_nuts
-    from models.registry import DEFAULT_RUNG
-    from workflows.config import DEFAULTS
-    from workflows.pipeline import comparison_specs
+    from beadrod.inference import diagnostics
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.numpyro_models import build_model
+    from beadrod.inference.sample import run_nuts
+    from beadrod.models.registry import DEFAULT_RUNG
+    from beadrod.workflows.config import DEFAULTS
+    from beadrod.workflows.pipeline import comparison_specs
 
     ds = datasets(world, seed)
     inputs = model_inputs(ds)

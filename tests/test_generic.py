@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import backbone, generic, jkr, registry, shift
-from models.law import RungUnavailable
+from beadrod.models import backbone, generic, jkr, registry, shift
+from beadrod.models.law import RungUnavailable
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
          "mass": 0.01613, "gravity": 9.81}
@@ -78,7 +78,7 @@ FULL_SCENE = {**SCENE, "roughness_rms": 25e-9, "surface_energy": 0.05}
 @pytest.mark.parametrize("name", registry.law_names())
 def test_frequency_at_inverts_overlap_at(name):
     # the f0 -> delta0 map every model conditions on, and its inverse (predictive f0)
-    from models.law import prior_median
+    from beadrod.models.law import prior_median
 
     law = registry.get_law(name)
     kw = law.resolve(FULL_SCENE, {p.name: prior_median(p.prior) for p in law.params})

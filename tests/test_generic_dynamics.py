@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from models import generic_dynamics as dyn
-from models import hertz, ladder, powerlaw, viscoelastic
-from models.rungs import LADDER, RUNGS
+from beadrod.models import generic_dynamics as dyn
+from beadrod.models import hertz, ladder, powerlaw, viscoelastic
+from beadrod.models.rungs import LADDER, RUNGS
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
          "mass": 0.01613, "gravity": 9.81}
@@ -66,7 +66,7 @@ def test_time_integration_matches_the_power_law_ladder(n):
 def test_viscoelastic_q_and_damping_are_the_kuwabara_kono_ones():
     # the law's own linear Q sets zeta, and the stiffness-proportional dashpot is KK's:
     # the generic HBM equals the peak of models.oscillator.Viscoelastic(A omega0 = 1/Q)
-    from models.oscillator import PowerLaw, Viscoelastic
+    from beadrod.models.oscillator import PowerLaw, Viscoelastic
 
     law = viscoelastic.LAW
     kw, d0 = _kw(law, young=200e9, eta=2e5)
@@ -81,7 +81,7 @@ def test_viscoelastic_q_and_damping_are_the_kuwabara_kono_ones():
 
 @pytest.mark.slow
 def test_jkr_peak_tends_to_its_backbone_as_one_over_q_squared():
-    from models import jkr
+    from beadrod.models import jkr
 
     law = jkr.LAW
     kw, d0 = _kw(law, young=200e9, gamma=0.7)
@@ -117,7 +117,7 @@ def test_contact_loss_gives_a_number_or_a_clear_error_never_nan():
 
 
 def test_every_builtin_law_lists_every_ladder_rung():
-    from models.registry import get_law, law_names
+    from beadrod.models.registry import get_law, law_names
 
     for name in law_names():
         assert set(LADDER) <= set(get_law(name).rungs), name
@@ -136,8 +136,8 @@ def test_a_law_without_loss_refuses_a_useless_q():
 def test_shift_command_takes_every_rung_the_law_has(capsys):
     import json
 
-    from workflows.cli import main
-    from workflows.cmd_shift import METHODS
+    from beadrod.workflows.cli import main
+    from beadrod.workflows.cmd_shift import METHODS
 
     assert set(METHODS) == set(RUNGS)
     assert main(["shift", "--law", "hertz", "--x", "0.5", "1.5", "--method", "series",
@@ -155,7 +155,7 @@ def test_shift_command_takes_every_rung_the_law_has(capsys):
 def test_shift_command_harmonic_balance_is_the_ladder_peak(capsys):
     import json
 
-    from workflows.cli import main
+    from beadrod.workflows.cli import main
 
     assert main(["shift", "--law", "hertz", "--x", "0.4", "--method", "harmonic_balance",
                  "--json"]) == 0

@@ -14,9 +14,9 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from models import greenwood_tripp as gt
-from models import greenwood_williamson as gw
-from models import hertz
+from beadrod.models import greenwood_tripp as gt
+from beadrod.models import greenwood_williamson as gw
+from beadrod.models import hertz
 
 S = gt.SUMMIT_CUTOFF
 R = 7.938e-3
@@ -318,7 +318,7 @@ def test_in_the_default_comparison_with_finite_backbone_gradients_over_the_prior
     tests/test_shape_tables.py); d shift / d(E, sigma factor, x) is finite from factor 0.05
     to 40 (D0' from ~80 down past the table's piece break at D0' = 4) and at x through
     contact loss to beyond the table's x = 2."""
-    from models import greenwood_williamson as gwm
+    from beadrod.models import greenwood_williamson as gwm
 
     law = gwm.LAW
     assert law.in_default_comparison
@@ -343,7 +343,7 @@ def test_summit_count_behind_the_law_domain():
     # (the module doc), by mpmath; the law's domain starts where N is 0.07
     import mpmath as mp
 
-    from models import greenwood_williamson as gw
+    from beadrod.models import greenwood_williamson as gw
 
     def count(d0e):
         sf = lambda s: mp.erfc(s / mp.sqrt(2)) / 2  # noqa: E731

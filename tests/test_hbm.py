@@ -5,9 +5,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import hbm
-from models.backbone import backbone_shift
-from models.oscillator import PowerLaw, hertz
+from beadrod.models import hbm
+from beadrod.models.backbone import backbone_shift
+from beadrod.models.oscillator import PowerLaw, hertz
 
 
 def test_hbm_backbone_converges_to_energy_integral_backbone():

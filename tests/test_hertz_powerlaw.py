@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import hertz, powerlaw
-from models.materials import (
+from beadrod.models import hertz, powerlaw
+from beadrod.models.materials import (
     G_STANDARD,
     bead_mass,
     bead_weight,

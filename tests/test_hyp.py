@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from models._hyp import (
+from beadrod.models._hyp import (
     NEG_INF_GRAD,
     dmean_power_dx_at_one,
     mean_power,

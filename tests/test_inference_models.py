@@ -12,18 +12,18 @@ from numpyro.infer import Predictive
 from numpyro.infer.util import potential_energy, unconstrain_fn
 from scipy import integrate
 
-from inference.likelihood import design_inputs, model_inputs, simulate, without_observations
-from inference.numpyro_models import (
+from beadrod.inference.likelihood import design_inputs, model_inputs, simulate, without_observations
+from beadrod.inference.numpyro_models import (
     ForwardModelUnavailable,
     MeasuredF0,
     ModelSpec,
     build_model,
     curve_draws,
 )
-from inference.sample import run_nuts
-from models import hertz, materials
-from models.scenes import builtin_scene
-from workflows.idata_io import load_idata, save_idata
+from beadrod.inference.sample import run_nuts
+from beadrod.models import hertz, materials
+from beadrod.models.scenes import builtin_scene
+from beadrod.workflows.idata_io import load_idata, save_idata
 
 R = 7.938e-3  # the paper's bead radius [m]
 SCENE = builtin_scene("paper")  # mass, load, radius, bead and rod materials
@@ -190,8 +190,8 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     the scaled site, and refuses a truth it would otherwise ignore."""
     from scipy import stats
 
-    from models import maugis_dugdale_static as static
-    from models.registry import get_law
+    from beadrod.models import maugis_dugdale_static as static
+    from beadrod.models.registry import get_law
 
     law = get_law("maugis_dugdale")
     pg, pl = law.param("gamma").prior, law.param("lam").prior
@@ -225,7 +225,7 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     # the scaled site is described in an InferenceData (no unit: gamma's times a scale)
     import arviz as az
 
-    from inference.sample import describe
+    from beadrod.inference.sample import describe
 
     idata = describe(az.from_dict(posterior={"gamma_scaled": np.ones((1, 3)),
                                              "gamma": np.ones((1, 3))}))
@@ -239,8 +239,8 @@ SCENE_KW = {"load": SCENE.load, "mass": SCENE.mass, "radius": R}
 
 def _law_kw(law, shape):
     """Resolved keywords of ``law`` with its shape parameter (gamma, n) set to ``shape``."""
-    from inference.likelihood import scene_quantities
-    from models.registry import get_law
+    from beadrod.inference.likelihood import scene_quantities
+    from beadrod.models.registry import get_law
 
     theta = {"jkr": {"young": 200e9, "gamma": shape}, "powerlaw": {"n": shape,
              "delta0_ref_log": np.log(45e-9)}}.get(law, {"young": 200e9})
@@ -264,7 +264,7 @@ def test_f0_density_integrates_to_one(law, shape):
     assert abs(bare - 1.0) > 100.0
     # sampling inverts the map: draws of f0 give log delta0 ~ Normal(log_ref, 0.12)
     f = d.sample(jax.random.PRNGKey(0), (20000,))
-    from inference.numpyro_models import log_overlap
+    from beadrod.inference.numpyro_models import log_overlap
     z = np.asarray(log_overlap(law, f, _law_kw(law, shape)))
     assert z.mean() == pytest.approx(log_ref, abs=0.005) and z.std() == pytest.approx(0.12, rel=0.03)
 
@@ -387,7 +387,7 @@ def test_idata_netcdf_keeps_dims_coords_and_units(named_fit, tmp_path):
 
 
 def test_idata_default_coords_and_bad_protocol_ids():
-    from inference.sample import idata_coords
+    from beadrod.inference.sample import idata_coords
 
     des = design_inputs(SCENE, n_protocols=3, amplitudes=AMPS, q_every=2)
     c = idata_coords(des)
@@ -457,10 +457,10 @@ def test_baseline_passes_its_gate_on_the_embedded_worlds(world):
     """At the comparison's default sampling settings (workflows.config.DEFAULTS: 4 chains
     x 500 warmup + 1000 draws) the baseline passes the full gate on both embedded worlds
     (before its reparameterisation: R-hat 1.07, bulk ESS 50 on hertz_dynamics)."""
-    import data as bd
-    from inference import diagnostics
-    from inference.likelihood import model_inputs
-    from workflows.config import DEFAULTS
+    from beadrod import data as bd
+    from beadrod.inference import diagnostics
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.workflows.config import DEFAULTS
 
     s = DEFAULTS["sampling"]
     ds = bd.process(bd.load_dataset(bd.default_path().parent / world))

@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import jkr, jkr_table
-from models.shift import first_order_hertz
+from beadrod.models import jkr, jkr_table
+from beadrod.models.shift import first_order_hertz
 
 R = 0.007938
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from models import ladder
+from beadrod.models import ladder
 
 
 def test_cheap_rungs_small_amplitude():
@@ -11,7 +11,7 @@ def test_cheap_rungs_small_amplitude():
     r1, r3 = float(ladder.rung1_series(x)[0]), float(ladder.rung3_backbone(x)[0])
     assert r1 == pytest.approx(-x[0] ** 2 / 24)
     assert r3 == pytest.approx(r1, rel=2e-3)
-    pytest.importorskip("models.shift")
+    pytest.importorskip("beadrod.models.shift")
     r2 = float(ladder.rung2_first_order(x)[0])
     # first order misses the quadratic-force term: 3/4 of the exact small-x shift
     assert r2 / r3 == pytest.approx(0.75, rel=2e-3)

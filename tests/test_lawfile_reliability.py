@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from inference.likelihood import scene_quantities
-from models import registry
-from models.lawfile import NAME_MAX, LawFileError, load_law_file
-from models.scenes import builtin_scene
-from workflows import lawfiles
-from workflows.cli import main
+from beadrod.inference.likelihood import scene_quantities
+from beadrod.models import registry
+from beadrod.models.lawfile import NAME_MAX, LawFileError, load_law_file
+from beadrod.models.scenes import builtin_scene
+from beadrod.workflows import lawfiles
+from beadrod.workflows.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = scene_quantities(builtin_scene("paper"))
@@ -171,11 +171,11 @@ def test_priors_without_a_scalar_inverse_cdf_are_refused(tmp_path, capsys, prior
 
 
 def test_a_law_prior_object_must_be_proper(tmp_path):
-    f = _law_file(tmp_path, top="from models.law import Prior",
+    f = _law_file(tmp_path, top="from beadrod.models.law import Prior",
                   priors='{"young": Prior("uniform", 250e9, 150e9)}')
     with pytest.raises(LawFileError, match=r"PRIORS\['young'\] = .* is not a proper prior"):
         load_law_file(f, SCENE)
-    f = _law_file(tmp_path, top="from models.law import Prior",
+    f = _law_file(tmp_path, top="from beadrod.models.law import Prior",
                   priors='{"young": Prior("cauchy", 2e11, 1e10)}')
     with pytest.raises(LawFileError, match="kind must be one of"):
         load_law_file(f, SCENE)
@@ -237,7 +237,7 @@ EVIL = f"{SCRIPT} ![x](http://tracker/x.png) [y](javascript:alert(2)) &lt;b&gt; 
 
 
 def test_markdown_escape_keeps_the_projects_markup():
-    from workflows.markdown import code_fence, md_escape
+    from beadrod.workflows.markdown import code_fence, md_escape
 
     out = md_escape(f"**{EVIL}** `a <b> c` k < 0.7, R&D")
     assert "<script" not in out and "&lt;script>" in out
@@ -249,7 +249,7 @@ def test_markdown_escape_keeps_the_projects_markup():
 
 
 def test_user_text_is_escaped_in_report_md_and_comparison_md(tmp_path):
-    from workflows.report import comparison_table, render_report
+    from beadrod.workflows.report import comparison_table, render_report
 
     res = {"laws": [{"name": "lf_evil", "label": EVIL, "status": "ok", "log_z": -3.0,
                      "log_z_err": 0.1, "rung": "backbone",

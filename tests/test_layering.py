@@ -75,17 +75,19 @@ def collect(root: Path, packages: tuple[str, ...]) -> tuple[set[str], list[Impor
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 for alias in node.names:
-                    if alias.name.split(".")[0] in packages:
-                        imports.append(Import(mod, _known(alias.name, modules), node.lineno))
+                    name = _unprefixed(alias.name)
+                    if name.split(".")[0] in packages:
+                        imports.append(Import(mod, _known(name, modules), node.lineno))
                         if alias.asname:
-                            bound[alias.asname] = alias.name
+                            bound[alias.asname] = name
             elif isinstance(node, ast.ImportFrom):
-                base = _resolve_from(mod, is_pkg, node)
-                if base.split(".")[0] not in packages:
+                base = _unprefixed(_resolve_from(mod, is_pkg, node))
+                top = [a.name for a in node.names] if base == "" else [base]
+                if not all(t.split(".")[0] in packages for t in top):
                     continue
                 plain = []
                 for alias in node.names:
-                    sub = f"{base}.{alias.name}"
+                    sub = f"{base}.{alias.name}" if base else alias.name
                     if sub in modules:
                         imports.append(Import(mod, sub, node.lineno))
                         bound[alias.asname or alias.name] = sub
@@ -100,6 +102,12 @@ def collect(root: Path, packages: tuple[str, ...]) -> tuple[set[str], list[Impor
                 private_attrs.setdefault(mod, []).append(
                     (bound[node.value.id], node.attr, node.lineno))
     return modules, imports, private_attrs
+
+
+def _unprefixed(name: str) -> str:
+    # the packages install as beadrod.models, ...; the graph is drawn on the folders' names
+    # ("from beadrod import data" is an import of data: "")
+    return "" if name == "beadrod" else name.removeprefix("beadrod.")
 
 
 def _resolve_from(mod: str, is_pkg: bool, node: ast.ImportFrom) -> str:

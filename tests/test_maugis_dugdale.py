@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from models import adhesion, dmt, jkr
-from models import maugis_dugdale as md
+from beadrod.models import adhesion, dmt, jkr
+from beadrod.models import maugis_dugdale as md
 
 R_BEAD, RHO, NU, G, GAMMA = 7.938e-3, 7700.0, 0.27, 9.80665, 0.7
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * RHO

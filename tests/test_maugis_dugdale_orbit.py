@@ -13,9 +13,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import dmt, generic, jkr
-from models import maugis_dugdale as md
-from models import maugis_dugdale_orbit as orbit
+from beadrod.models import dmt, generic, jkr
+from beadrod.models import maugis_dugdale as md
+from beadrod.models import maugis_dugdale_orbit as orbit
 
 R_BEAD, RHO, NU, G = 7.938e-3, 7700.0, 0.27, 9.80665
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * RHO

@@ -9,8 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import maugis_dugdale as md
-from models import maugis_dugdale_static as st
+from beadrod.models import maugis_dugdale as md
+from beadrod.models import maugis_dugdale_static as st
 
 R_BEAD, NU = 7.938e-3, 0.27
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * 7700.0

@@ -6,7 +6,7 @@ import arviz as az
 import numpy as np
 import pytest
 
-from inference import mcmc_stats
+from beadrod.inference import mcmc_stats
 
 
 def _ar1(rng, chains, draws, k, phi):

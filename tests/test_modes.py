@@ -8,8 +8,8 @@ import numpyro.distributions as dist
 import pytest
 from jax.scipy.special import logsumexp
 
-from inference.modes import find_modes
-from inference.sample import run_nuts
+from beadrod.inference.modes import find_modes
+from beadrod.inference.sample import run_nuts
 
 # prior N(0, 1); likelihood: two narrow bumps (width W) at A (near the prior median) and B,
 # B's 12 nats taller. Peak log densities, closed form: log N(m; 0, 1) + log bump height
@@ -60,8 +60,8 @@ def test_no_finite_start_is_a_clear_error():
 
 @pytest.fixture(scope="module")
 def paper_inputs():
-    import data as bd
-    from inference.likelihood import model_inputs
+    from beadrod import data as bd
+    from beadrod.inference.likelihood import model_inputs
 
     return model_inputs(bd.process(bd.load_dataset(bd.default_path())))
 
@@ -71,7 +71,7 @@ def test_law_domain_gives_zero_likelihood_outside(paper_inputs):
     # parameter point impossible, where the held value would have been fitted silently
     from numpyro.infer.util import log_density
 
-    from inference.numpyro_models import build_model
+    from beadrod.inference.numpyro_models import build_model
 
     model = build_model("hertz", rung="backbone")
     params = {"young": 200e9, "delta0_scatter": 0.1, "offset_down": -0.005,

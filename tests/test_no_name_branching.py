@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models import hertz, powerlaw, viscoelastic
-from models.registry import law_names, register, tension_pair, unregister
+from beadrod.models import hertz, powerlaw, viscoelastic
+from beadrod.models.registry import law_names, register, tension_pair, unregister
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -100,8 +100,8 @@ def test_tension_pair_is_found_by_role(renamed):
 
 
 def test_tension_jobs_fit_the_pair_they_are_given(renamed):
-    from workflows import compare_outputs
-    from workflows.config import DEFAULTS
+    from beadrod.workflows import compare_outputs
+    from beadrod.workflows.config import DEFAULTS
 
     jobs = compare_outputs.tension_jobs(DEFAULTS, Path("/nonexistent"), "backbone",
                                         "normal", ("kv_test", "kv_test_split"))
@@ -115,8 +115,8 @@ def test_tension_jobs_fit_the_pair_they_are_given(renamed):
 
 
 def test_job_order_follows_the_laws_cost(renamed):
-    from workflows.parallel import Job
-    from workflows.pipeline import comparison_specs, job_order
+    from beadrod.workflows.parallel import Job
+    from beadrod.workflows.pipeline import comparison_specs, job_order
 
     specs = comparison_specs(["hertz", "jkr", "baseline", "hertz_costly_test",
                               "viscoelastic"], "backbone", "normal")
@@ -129,8 +129,8 @@ def test_job_order_follows_the_laws_cost(renamed):
 
 
 def test_nominal_parameters_say_where_each_value_comes_from():
-    from models.law import Param, Prior
-    from models.nominal import nominal_parameters
+    from beadrod.models.law import Param, Prior
+    from beadrod.models.nominal import nominal_parameters
 
     law = dataclasses.replace(hertz.LAW, name="nominal_test", params=(
         hertz.LAW.params[0],
@@ -155,8 +155,8 @@ def test_theory_curves_and_f0_ranges_iterate_over_the_laws(renamed):
     sqrt(1.5 F0 / (m delta0)) / (2 pi) with delta0 = (3 F0 / (4 E* sqrt R))^(2/3)."""
     import jax
 
-    from models.scenes import builtin_scene
-    from workflows.compare_figures import exponent_law, f0_ranges, theory_curves
+    from beadrod.models.scenes import builtin_scene
+    from beadrod.workflows.compare_figures import exponent_law, f0_ranges, theory_curves
 
     scene = builtin_scene("paper")
     x = np.linspace(1e-3, 1.3, 27)

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from data.io import write_text
-from workflows import outdir
-from workflows.cli import main
-from workflows.runtime import UserError
+from beadrod.data.io import write_text
+from beadrod.workflows import outdir
+from beadrod.workflows.cli import main
+from beadrod.workflows.runtime import UserError
 
 ROOT = Path(__file__).parents[1]
 
@@ -98,7 +98,7 @@ def test_folder_without_manifest_is_refused_even_with_force(tmp_path):
 def test_manifest_lists_files_written_by_worker_processes(tmp_path):
     out = tmp_path / "o"
     outdir.check_out(out, force=False)
-    code = ("import sys; from data.io import write_text; "
+    code = ("import sys; from beadrod.data.io import write_text; "
             "write_text(sys.argv[1], 'from a child')")
     subprocess.run([sys.executable, "-c", code, str(out / "figures" / "w.png")], check=True,
                    env=os.environ.copy(), timeout=60)
@@ -110,7 +110,7 @@ def test_manifest_lists_files_written_by_worker_processes(tmp_path):
 
 def test_second_run_into_a_locked_folder_is_refused(tmp_path):
     out = tmp_path / "o"
-    code = ("import sys, time; from workflows.outdir import check_out; "
+    code = ("import sys, time; from beadrod.workflows.outdir import check_out; "
             "check_out(__import__('pathlib').Path(sys.argv[1]), force=False, command='fit'); "
             "print('locked', flush=True); time.sleep(60)")
     p = subprocess.Popen([sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE,
@@ -162,7 +162,7 @@ def test_read_only_folder_as_root(tmp_path, monkeypatch):
 def test_full_disk_while_logging_gives_one_line(tmp_path, capsys):
     import logging
 
-    from workflows import runtime
+    from beadrod.workflows import runtime
 
     runtime.setup_logging(tmp_path, quiet=False)
     try:
@@ -182,7 +182,7 @@ def test_full_disk_while_logging_gives_one_line(tmp_path, capsys):
 def test_figure_worker_ends_with_its_killed_parent(tmp_path):
     code = """
 import os, sys, time
-from workflows.figure_pool import FigureWriter
+from beadrod.workflows.figure_pool import FigureWriter
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -283,7 +283,7 @@ def test_bench_refuses_existing_outputs(tmp_path, capsys):
 
 
 def test_resume_with_a_folder_where_a_summary_belongs(tmp_path):
-    from workflows.pipeline import _cached
+    from beadrod.workflows.pipeline import _cached
 
     (tmp_path / "hertz.json").mkdir()
     with pytest.raises(UserError, match="is not a file"):
@@ -291,7 +291,7 @@ def test_resume_with_a_folder_where_a_summary_belongs(tmp_path):
 
 
 def test_report_failure_keeps_the_fits_and_says_so(tmp_path):
-    from workflows.comparison import _report_failed
+    from beadrod.workflows.comparison import _report_failed
 
     exc = _report_failed(tmp_path, {"hertz": None}, KeyError("protocols"))
     assert isinstance(exc, UserError)
@@ -310,7 +310,7 @@ def test_manifest_survives_a_torn_line(tmp_path):
 
 
 def test_manifest_variable_is_one_name():
-    from data.io import MANIFEST_ENV
+    from beadrod.data.io import MANIFEST_ENV
 
     assert outdir._MANIFEST_ENV == MANIFEST_ENV
 
@@ -318,7 +318,7 @@ def test_manifest_variable_is_one_name():
 def test_a_disk_that_fills_during_a_command_is_one_line(tmp_path, capsys, monkeypatch):
     import errno
 
-    from data import load
+    from beadrod.data import load
 
     def full(target, *a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(target))

@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from models import _plan_rod, scenes
-from models import plan as planmod
-from models.plan import EFFECT_NAMES, RUNGS, plan_scene
+from beadrod.models import _plan_rod, scenes
+from beadrod.models import plan as planmod
+from beadrod.models.plan import EFFECT_NAMES, RUNGS, plan_scene
 
 
 @pytest.fixture(scope="module")
@@ -162,7 +162,7 @@ def test_pull_of_a_drive_filter_on_the_peak(q, r):
 def test_first_branch_slows_monotonically_towards_rayleigh():
     """The dispersion bound takes e <= 1 - c_R/c0 above the branch solver's domain: the
     first branch's phase velocity falls from c0 towards the Rayleigh velocity c_R."""
-    from models import rod
+    from beadrod.models import rod
 
     nu, young, rho, a = 0.27, 200e9, 7700.0, 6e-3
     assert _plan_rod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
@@ -211,7 +211,7 @@ def test_viscous_bound_covers_exact_linear_peaks(q):
 
 
 def test_plan_command_json(capsys):
-    from workflows import cmd_plan
+    from beadrod.workflows import cmd_plan
 
     parser = argparse.ArgumentParser()
     cmd_plan.register(parser.add_subparsers())
@@ -232,8 +232,8 @@ def test_rung_error_estimates_cover_exact_backbone():
     estimate and its series / first-order error estimates are upper bounds for x <= 0.9."""
     import jax.numpy as jnp
 
-    from models.backbone import backbone_shift, lindstedt_shift
-    from models.shift import first_order_hertz
+    from beadrod.models.backbone import backbone_shift, lindstedt_shift
+    from beadrod.models.shift import first_order_hertz
 
     xs = np.array([0.1, 0.3, 0.6, 0.9])
     exact = np.asarray(backbone_shift(jnp.asarray(xs), 1.5))

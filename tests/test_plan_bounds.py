@@ -14,9 +14,9 @@ import math
 
 import pytest
 
-from models.plan import plan_scene
-from models.scenes import builtin_scene
-from models.simulate import build_simulator
+from beadrod.models.plan import plan_scene
+from beadrod.models.scenes import builtin_scene
+from beadrod.models.simulate import build_simulator
 
 _PLANS = {}
 

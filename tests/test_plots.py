@@ -12,7 +12,7 @@ import pytest
 from matplotlib.collections import PolyCollection
 from matplotlib.text import Text
 
-from workflows import figure_data, plots, plots_data, styles
+from beadrod.workflows import figure_data, plots, plots_data, styles
 
 
 def _idata(seed: int = 0, chains: int = 2, draws: int = 60, n_obs: int = 15, shift: float = 0.0):
@@ -169,7 +169,7 @@ def test_styles_give_every_model_its_own_colour_never_black():
 
 
 def test_styles_prefer_the_registry_colour_and_label():
-    from models import registry
+    from beadrod.models import registry
 
     for law in registry.laws():
         if getattr(law, "color", None):
@@ -270,8 +270,8 @@ def test_shift_ppc_rejects_misaligned_panels():
 # ------------------------------------------------------------------------- other figures
 
 def test_max_shift_draws_both_rungs_and_the_fitted_n():
-    from models.backbone_table import backbone_shift_fast
-    from models.shift import first_order_powerlaw
+    from beadrod.models.backbone_table import backbone_shift_fast
+    from beadrod.models.shift import first_order_powerlaw
 
     n = np.linspace(1.01, 3.0, 60)
     fo = np.asarray(first_order_powerlaw(1.0, n))
@@ -376,12 +376,12 @@ def test_evidence_is_relative_to_the_preferred_law_and_prints_values():
 def tiny_fit(tmp_path_factory):
     """Hertz fitted to the embedded data with a few NUTS draws (one chain); the evidence
     table lists a second law that has no fit."""
-    import data as bd
-    from inference.likelihood import model_inputs
-    from inference.numpyro_models import build_model
-    from inference.sample import run_nuts
-    from workflows.compare_figures import fitted_specs
-    from workflows.pipeline import LawRun
+    from beadrod import data as bd
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.numpyro_models import build_model
+    from beadrod.inference.sample import run_nuts
+    from beadrod.workflows.compare_figures import fitted_specs
+    from beadrod.workflows.pipeline import LawRun
 
     ds = bd.load_default()
     inputs = model_inputs(ds)
@@ -409,8 +409,8 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkey
     out pixel for pixel the same."""
     import matplotlib.image as mpimg
 
-    from workflows import figure_pool
-    from workflows.compare_figures import make_figures
+    from beadrod.workflows import figure_pool
+    from beadrod.workflows.compare_figures import make_figures
 
     ds, inputs, runs, result, _, out = tiny_fit
     entries = make_figures(runs, inputs, ds, result, out)
@@ -432,7 +432,7 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkey
 
 
 def test_tiny_fit_panels_follow_the_law(tiny_fit):
-    from models import hertz
+    from beadrod.models import hertz
 
     ds, inputs, runs, _, specs, _ = tiny_fit
     hz = figure_data.shift_panel("hertz", "Hertz", specs["hertz"], runs["hertz"].idata,

@@ -114,17 +114,17 @@ from typing import Any
 import numpy as np
 import pytest
 
-from inference import diagnostics
-from inference.bridge import bridge_sampling_log_z
-from inference.evidence import EvidenceResult
-from inference.likelihood import design_inputs, simulate
-from inference.numpyro_models import LAWS as INFERENCE_LAWS
-from inference.numpyro_models import build_model
-from inference.sample import run_nuts
-from models import registry
-from models.scenes import builtin_scene
-from workflows.config import DEFAULTS
-from workflows.pipeline import MODEL_SPECS, comparison_specs
+from beadrod.inference import diagnostics
+from beadrod.inference.bridge import bridge_sampling_log_z
+from beadrod.inference.evidence import EvidenceResult
+from beadrod.inference.likelihood import design_inputs, simulate
+from beadrod.inference.numpyro_models import LAWS as INFERENCE_LAWS
+from beadrod.inference.numpyro_models import build_model
+from beadrod.inference.sample import run_nuts
+from beadrod.models import registry
+from beadrod.models.scenes import builtin_scene
+from beadrod.workflows.config import DEFAULTS
+from beadrod.workflows.pipeline import MODEL_SPECS, comparison_specs
 
 pytestmark = pytest.mark.slow
 

@@ -15,11 +15,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflows.report import comparison_table, render_report, statistical_warnings
-from workflows.report_params import param_table, prior_text, priors_table
-from workflows.report_tables import fmt_pm, headline, timings_table
-from workflows.report_tension import tension_sentences, tension_table
-from workflows.report_truth import world_truth
+from beadrod.workflows.report import comparison_table, render_report, statistical_warnings
+from beadrod.workflows.report_params import param_table, prior_text, priors_table
+from beadrod.workflows.report_tables import fmt_pm, headline, timings_table
+from beadrod.workflows.report_tension import tension_sentences, tension_table
+from beadrod.workflows.report_truth import world_truth
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -415,7 +415,7 @@ def test_truth_shown_or_explained_never_an_empty_column(tmp_path):
 def test_protocol_truth_coverage():
     import arviz as az
 
-    from workflows.report_truth import protocol_truth
+    from beadrod.workflows.report_truth import protocol_truth
 
     rng = np.random.default_rng(0)
     d0 = np.array([50e-9, 55e-9, 45e-9])
@@ -479,8 +479,8 @@ def test_data_section_lists_exclusions_per_protocol(tmp_path):
 
 
 def test_exclusions_of_the_embedded_data_match_its_truth():
-    from data import load_default
-    from workflows.compare_outputs import exclusions
+    from beadrod.data import load_default
+    from beadrod.workflows.compare_outputs import exclusions
 
     ex = exclusions(load_default().excluded)
     truth = json.loads((ROOT / "data/paper_like/truth.json").read_text())
@@ -607,7 +607,7 @@ def test_headline_when_no_law_passed_its_gate(tmp_path):
 
 
 def test_diagnostics_warnings_say_each_reason_once():
-    from workflows.report_tables import diagnostics_table
+    from beadrod.workflows.report_tables import diagnostics_table
 
     law = _law("a", "A", -1.0, 0.1, -1.0, status="failed", failures=["R-hat max 1.03 >= 1.01"])
     law["diagnostics"]["rhat_max"] = 1.03

@@ -12,13 +12,13 @@ import pytest
 from numpyro import handlers
 from numpyro.infer.util import log_density
 
-from inference import residual_fold as R
-from inference.likelihood import model_inputs
-from inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
-from inference.priors import law_prior
-from models.registry import get_law
-from workflows.config import DEFAULTS
-from workflows.pipeline import load_data
+from beadrod.inference import residual_fold as R
+from beadrod.inference.likelihood import model_inputs
+from beadrod.inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
+from beadrod.inference.priors import law_prior
+from beadrod.models.registry import get_law
+from beadrod.workflows.config import DEFAULTS
+from beadrod.workflows.pipeline import load_data
 
 LAW = "maugis_dugdale"
 
@@ -34,7 +34,7 @@ def folded(inputs):
     search's, which a fit traces first). There lambda's LogUniform prior, built under the
     trace, held traced log bounds, whose quantiles gave no range, and the fold was
     silently skipped in every fit."""
-    from inference import fold as F
+    from beadrod.inference import fold as F
 
     law = get_law(LAW)
     sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import optimize, special
 
-from models import rod
+from beadrod.models import rod
 
 STEEL = dict(young=200e9, poisson=0.27, density=7700.0)
 PMMA = dict(young=3.3e9, poisson=0.37, density=1190.0)

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from models import scenes
-from models.scenes import SceneError
+from beadrod.models import scenes
+from beadrod.models.scenes import SceneError
 
 PAPER_R, PAPER_RHO, G = 7.938e-3, 7700.0, 9.80665
 
@@ -112,7 +112,7 @@ def test_bad_toml_and_missing_file(tmp_path):
 
 
 def _run_cli(argv, capsys):
-    from workflows import cmd_scene
+    from beadrod.workflows import cmd_scene
 
     parser = argparse.ArgumentParser()
     cmd_scene.register(parser.add_subparsers())
@@ -154,8 +154,8 @@ def test_scene_command_covers_every_registered_law_at_nominal_values(capsys):
     sqrt R))^(2/3); F = C delta^n: K0 = n F0/delta0), with --param for the exponent."""
     import dataclasses
 
-    from models import hertz
-    from models.registry import law_names, register, unregister
+    from beadrod.models import hertz
+    from beadrod.models.registry import law_names, register, unregister
 
     copy = dataclasses.replace(hertz.LAW, name="hertz_copy_scene_test", label="Hertz copy",
                                static_overlap=None, overlap_from_frequency=None)
@@ -186,7 +186,7 @@ def test_scene_command_covers_every_registered_law_at_nominal_values(capsys):
 
 
 def test_scene_command_refuses_unknown_or_absurd_parameters(capsys):
-    from workflows.cli import UserError
+    from beadrod.workflows.cli import UserError
 
     with pytest.raises(UserError, match="no registered law has such a parameter"):
         _run_cli(["scene", "--param", "nope=1"], capsys)
@@ -197,7 +197,7 @@ def test_scene_command_refuses_unknown_or_absurd_parameters(capsys):
 def test_scene_command_text_and_error(tmp_path, capsys):
     rc, out = _run_cli(["scene", "--builtin", "micro_bead"], capsys)
     assert rc == 0 and "micro_bead" in out and "Maugis" in out
-    from workflows.cli import UserError
+    from beadrod.workflows.cli import UserError
 
     with pytest.raises(UserError, match="did you mean"):
         _run_cli(["scene", str(_toml(tmp_path, BASE.replace("radius_m =", "radius =")))],
@@ -234,7 +234,7 @@ def test_every_builtin_lies_within_the_bounds():
 def test_scene_path_that_is_a_folder(tmp_path, capsys):
     with pytest.raises(SceneError, match="is a folder"):
         scenes.load_scene(tmp_path)
-    from workflows.cli import main
+    from beadrod.workflows.cli import main
 
     assert main(["scene", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
@@ -311,7 +311,7 @@ def test_scene_nested_too_deeply_is_one_line(tmp_path, text):
 
 def test_read_toml_names_the_file_for_every_failure(tmp_path):
     # the one reader of user TOML, for scene and config files alike (models.tomlfile)
-    from models.tomlfile import read_toml
+    from beadrod.models.tomlfile import read_toml
 
     class Mine(ValueError):
         pass

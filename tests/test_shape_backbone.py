@@ -5,7 +5,7 @@ them, and the laws' backbone rungs read exactly these tables."""
 import numpy as np
 import pytest
 
-from models import registry, shape_backbone, shape_tables
+from beadrod.models import registry, shape_backbone, shape_tables
 
 X = np.array([0.05, 0.4, 0.85, 1.1, 1.6, 2.0])
 # the second shape coordinate, where a table has one (Maugis-Dugdale's lam, inside its range)

@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import backbone, generic, registry, shape_backbone, shape_tables, surrogate
+from beadrod.models import backbone, generic, registry, shape_backbone, shape_tables, surrogate
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
          "mass": 0.01613, "gravity": 9.81, "roughness_rms": 25e-9, "surface_energy": 0.7}
@@ -135,7 +135,7 @@ def test_pieced_surrogate_reproduces_a_known_backbone():
     has no 'p_edges' (the single-interpolant tables are unchanged)."""
     import jax
 
-    from models import surrogate
+    from beadrod.models import surrogate
 
     def s_exact(x, p):
         xc, k = 0.8 + 0.05 * np.sin(p), -0.1 * (1.0 + 0.1 * p)
@@ -237,7 +237,7 @@ def test_tables_are_finite_with_finite_gradients_over_the_prior_region():
 def test_tables_tend_to_the_hertz_table_as_adhesion_vanishes():
     """The JKR and DMT tables approach the Hertz backbone table as gamma -> 0 (r = F0/Fc
     grows), monotonically, to within 2e-3 at the table's end (r = 1000)."""
-    from models.backbone_table import backbone_shift_fast
+    from beadrod.models.backbone_table import backbone_shift_fast
 
     hertz = np.asarray(backbone_shift_fast(X, 1.5))
     for name in ("jkr", "dmt"):

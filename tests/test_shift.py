@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from models._hyp import NEG_INF_GRAD
-from models.shift import (
+from beadrod.models._hyp import NEG_INF_GRAD
+from beadrod.models.shift import (
     complete_elliptic,
     first_order_from_stiffness,
     first_order_hertz,

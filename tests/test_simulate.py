@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from models import hbm, ladder
-from models.scenes import builtin_scene
-from models.simulate import PlasticityError, build_simulator
+from beadrod.models import hbm, ladder
+from beadrod.models.scenes import builtin_scene
+from beadrod.models.simulate import PlasticityError, build_simulator
 
 
 def _hertz_scene(q=50.0):

@@ -5,9 +5,9 @@ import argparse
 import numpy as np
 import pytest
 
-from data.load import load_dataset, write_dataset
-from data.process import default_path, process
-from data.synth import DEFAULT_SEED, generate
+from beadrod.data.load import load_dataset, write_dataset
+from beadrod.data.process import default_path, process
+from beadrod.data.synth import DEFAULT_SEED, generate
 
 FILES = ("measurements.csv", "scene.toml", "truth.json")
 
@@ -43,7 +43,7 @@ def test_paper_like_structure(world):
 def test_shift_follows_paper_eq25(world):
     import jax.numpy as jnp
 
-    from models.viscoelastic import shift_paper_eq25
+    from beadrod.models.viscoelastic import shift_paper_eq25
 
     _, _, truth = world
     obs = truth["observables"]["drive"]
@@ -89,7 +89,7 @@ def test_round_trip_recovers_truth(tmp_path, world):
 
 
 def test_simulate_regenerates_embedded_folder_bit_for_bit(tmp_path):
-    from workflows import cmd_simulate
+    from beadrod.workflows import cmd_simulate
 
     parser = argparse.ArgumentParser()
     cmd_simulate.register(parser.add_subparsers())
@@ -110,7 +110,7 @@ def test_different_seed_differs(world):
 @pytest.fixture(scope="module")
 def hertz_world(tmp_path_factory):
     folder = tmp_path_factory.mktemp("hd")
-    from workflows import cmd_simulate
+    from beadrod.workflows import cmd_simulate
 
     parser = argparse.ArgumentParser()
     cmd_simulate.register(parser.add_subparsers())
@@ -129,7 +129,7 @@ def test_hertz_dynamics_bit_for_bit(hertz_world):
 
 @pytest.mark.slow
 def test_hertz_dynamics_round_trip_and_physics(hertz_world):
-    from models.backbone import backbone_shift
+    from beadrod.models.backbone import backbone_shift
 
     ds = load_dataset(hertz_world)
     p = process(ds)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from numpy.polynomial import chebyshev as npcheb
 
-from models import backbone_table, chebyshev, p_cells, pq_patches, surrogate
-from models.shape_backbone import load_table
+from beadrod.models import backbone_table, chebyshev, p_cells, pq_patches, surrogate
+from beadrod.models.shape_backbone import load_table
 
 
 @pytest.mark.parametrize("m", [2, 8, 16, 24])

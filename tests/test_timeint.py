@@ -4,8 +4,8 @@ import jax
 import numpy as np
 import pytest
 
-from models import hbm, timeint
-from models.oscillator import hertz
+from beadrod.models import hbm, timeint
+from beadrod.models.oscillator import hertz
 
 
 def test_low_drive_q_and_resonance_amplitude():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from models import viscoelastic as ve
+from beadrod.models import viscoelastic as ve
 
 # The paper's setup (Secs. 2, 4.1): steel bead r = 7.938 mm, rho = 7700, nu = 0.27.
 R_BEAD, RHO, NU, G = 7.938e-3, 7700.0, 0.27, 9.80665

@@ -4,6 +4,6 @@
 ``data.io`` directly.
 """
 
-from data.io import atomic_path, write_bytes, write_json, write_text
+from beadrod.data.io import atomic_path, write_bytes, write_json, write_text
 
 __all__ = ["atomic_path", "write_text", "write_bytes", "write_json"]

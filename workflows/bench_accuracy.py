@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from workflows._io import write_text
+from beadrod.workflows._io import write_text
 
 __all__ = ["run", "X_VALUES"]
 
@@ -42,7 +42,7 @@ def _timed(fn, repeats=3):
 def _ladder_rows(xs, quick):
     from functools import partial
 
-    from models import ladder
+    from beadrod.models import ladder
 
     rungs = dict(ladder.RUNGS)
     rungs["5 time integration"] = partial(ladder.rung5_timeint, steps_per_period=128)
@@ -72,8 +72,8 @@ def _ladder_rows(xs, quick):
 def _frc_timing():
     import jax
 
-    from models import hbm
-    from models.oscillator import hertz
+    from beadrod.models import hbm
+    from beadrod.models.oscillator import hertz
 
     law = hertz(0.01)
     out = []
@@ -96,8 +96,8 @@ def _frc_timing():
 def _ti_vs_scipy(quick):
     import jax
 
-    from models import timeint
-    from models.oscillator import hertz
+    from beadrod.models import timeint
+    from beadrod.models.oscillator import hertz
 
     law, e = hertz(0.025), 0.06        # Q = 20, drive with contact loss at resonance
     om = np.linspace(0.88, 1.02, 8 if quick else 26)

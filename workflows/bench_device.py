@@ -46,8 +46,8 @@ def _simulator_rows(batches: tuple[int, ...], n_freq: int, budget_s: float) -> l
     import jax
     import jax.numpy as jnp
 
-    from models import timeint
-    from models.oscillator import hertz
+    from beadrod.models import timeint
+    from beadrod.models.oscillator import hertz
 
     law = hertz(0.01)  # Q = 50
     om = jnp.linspace(0.85, 1.02, n_freq)
@@ -73,8 +73,8 @@ def _simulator_rows(batches: tuple[int, ...], n_freq: int, budget_s: float) -> l
 
 def _nuts_rows(names: list[str], inputs: dict, chains: int, warm: int, draws: int,
                method: str) -> list[dict]:
-    from inference.bridge import bridge_sampling_log_z
-    from inference.numpyro_models import build_model
+    from beadrod.inference.bridge import bridge_sampling_log_z
+    from beadrod.inference.numpyro_models import build_model
 
     from .bench_inference import timed_nuts
     from .pipeline import comparison_specs
@@ -93,8 +93,8 @@ def _nuts_rows(names: list[str], inputs: dict, chains: int, warm: int, draws: in
 
 
 def _ns_row(inputs: dict, live: int) -> dict:
-    from inference.evidence import nested_sampling_log_z
-    from inference.numpyro_models import build_model
+    from beadrod.inference.evidence import nested_sampling_log_z
+    from beadrod.inference.numpyro_models import build_model
 
     from .pipeline import comparison_specs
 
@@ -124,7 +124,7 @@ def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Pa
 
     import jax
 
-    from inference.likelihood import model_inputs
+    from beadrod.inference.likelihood import model_inputs
 
     from .config import DEFAULTS
     from .pipeline import default_model_names, load_data

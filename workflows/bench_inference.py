@@ -109,7 +109,7 @@ def timed_nuts(model, inputs: dict[str, Any], chains: int, warm: int, draws: int
     """NUTS with compilation measured apart: (fit, compile s, sampling s, smallest bulk
     ESS over the scalar parameters). Sampling is NaN where the 1+1-iteration compile probe
     took (nearly) as long as the whole run: too short to separate."""
-    from inference.sample import run_nuts
+    from beadrod.inference.sample import run_nuts
 
     from .pipeline import PARAM_UNITS
 
@@ -182,8 +182,8 @@ def results_markdown(table) -> str:
 def _bench_names(default: list[str]) -> list[str]:
     """The default comparison's models, then the built-in laws it leaves out that have a
     fast backbone (their speed is what keeps them out: the benchmark measures it)."""
-    from inference.numpyro_models import BASELINE
-    from models.registry import laws
+    from beadrod.inference.numpyro_models import BASELINE
+    from beadrod.models.registry import laws
 
     extra = [law.name for law in laws() if law.name not in default and law.source == "built-in"
              and "backbone" in law.rungs and not law.too_slow_for_nuts("backbone")]
@@ -194,10 +194,10 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     """Measure and write ``bench_inference.csv`` / ``.md`` into ``out_dir``; return the .md."""
     import jax
 
-    from inference.bridge import bridge_sampling_log_z
-    from inference.likelihood import model_inputs
-    from inference.numpyro_models import ModelSpec, build_model
-    from inference.sample import draw_program
+    from beadrod.inference.bridge import bridge_sampling_log_z
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.sample import draw_program
 
     from .comparison import JOBS
     from .config import DEFAULTS, merge

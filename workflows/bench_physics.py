@@ -100,7 +100,7 @@ def run(out_dir: Path, quick: bool = False) -> Path:
     import mpmath as mp
     from scipy import special
 
-    from models.shift import first_order_powerlaw
+    from beadrod.models.shift import first_order_powerlaw
 
     mp.mp.dps = 30
     out_dir = Path(out_dir)

@@ -28,16 +28,16 @@ __all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES", "UserError
            "version_string", "EXIT_PIPE"]
 
 COMMAND_MODULES: tuple[str, ...] = (
-    "workflows.cmd_compare",
-    "workflows.cmd_laws",
-    "workflows.cmd_rungs",
-    "workflows.cmd_scene",
-    "workflows.cmd_shift",
-    "workflows.cmd_plan",
-    "workflows.cmd_run_scene",
-    "workflows.cmd_simulate",
-    "workflows.cmd_validate",
-    "workflows.cmd_bench",
+    "beadrod.workflows.cmd_compare",
+    "beadrod.workflows.cmd_laws",
+    "beadrod.workflows.cmd_rungs",
+    "beadrod.workflows.cmd_scene",
+    "beadrod.workflows.cmd_shift",
+    "beadrod.workflows.cmd_plan",
+    "beadrod.workflows.cmd_run_scene",
+    "beadrod.workflows.cmd_simulate",
+    "beadrod.workflows.cmd_validate",
+    "beadrod.workflows.cmd_bench",
 )
 
 
@@ -66,10 +66,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _user_errors() -> tuple[type[BaseException], ...]:
     """Errors printed as one actionable line (they name the file, row, column or key)."""
-    from data.schema import DataError
-    from models.law import RungUnavailable
-    from models.lawfile import LawFileError
-    from models.scenes import SceneError
+    from beadrod.data.schema import DataError
+    from beadrod.models.law import RungUnavailable
+    from beadrod.models.lawfile import LawFileError
+    from beadrod.models.scenes import SceneError
 
     from .config import ConfigError
 

@@ -13,10 +13,10 @@ from pathlib import Path
 __all__ = ["register", "BENCHES", "BENCH_EXTRAS", "BENCH_OUTPUTS"]
 
 BENCHES: dict[str, str] = {
-    "physics": "workflows.bench_physics",
-    "accuracy": "workflows.bench_accuracy",
-    "inference": "workflows.bench_inference",
-    "device": "workflows.bench_device",
+    "physics": "beadrod.workflows.bench_physics",
+    "accuracy": "beadrod.workflows.bench_accuracy",
+    "inference": "beadrod.workflows.bench_inference",
+    "device": "beadrod.workflows.bench_device",
 }
 
 
@@ -65,7 +65,7 @@ def _run(args: argparse.Namespace) -> int:
     platform = jax.devices()[0].platform
     check_out(Path(args.out), force=args.force, command=f"bench {args.which}",
               outputs=[o.format(platform=platform) for o in BENCH_OUTPUTS[args.which]])
-    from inference.sample import configure
+    from beadrod.inference.sample import configure
 
     configure(4)
     kw = {}

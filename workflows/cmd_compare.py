@@ -87,7 +87,7 @@ def check_laws(cfg: dict[str, Any]) -> None:
     With ``laws`` given, a law file whose law they leave out is refused: its code ran for
     nothing, and whoever added it expects its law in the tables. It is not added
     silently either: ``laws`` says exactly what is fitted."""
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     from .config import normalise_laws
     from .pipeline import model_names
@@ -115,7 +115,7 @@ def _run(args: argparse.Namespace) -> int:
     check_out(out, force=args.force, resume=args.resume)
     runtime.setup_logging(out, cfg["quiet"])
     runtime.host_devices(n_devices(cfg))  # before JAX starts
-    from inference.sample import configure
+    from beadrod.inference.sample import configure
 
     configure(n_devices(cfg))
     lawfiles.load(cfg["law_files"])

@@ -12,7 +12,7 @@ __all__ = ["register", "describe_laws"]
 
 def describe_laws(paths: list[str]) -> list[dict]:
     """Descriptions of every registered law (built in, then the law files ``paths``)."""
-    from models import registry
+    from beadrod.models import registry
 
     lawfiles.load(paths)
     return [law.describe() for law in registry.laws()]

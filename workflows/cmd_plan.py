@@ -76,8 +76,8 @@ def check_tolerance(value: float | None, default: float) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
-    from models.plan import DEFAULT_TOLERANCE, plan_scene
-    from models.scenes import SceneError
+    from beadrod.models.plan import DEFAULT_TOLERANCE, plan_scene
+    from beadrod.models.scenes import SceneError
 
     from .cmd_scene import resolve_scene
     from .runtime import UserError

@@ -63,8 +63,8 @@ def _write_curves(out: Path, c: dict) -> None:
     import numpy as np
     import pandas as pd
 
-    from workflows._io import write_text
-    from workflows.plots import fig_frc, save_figure
+    from beadrod.workflows._io import write_text
+    from beadrod.workflows.plots import fig_frc, save_figure
 
     cols = {"frequency_Hz": c["frequency_hz"]}
     labels, amps = [], []
@@ -80,7 +80,7 @@ def _write_curves(out: Path, c: dict) -> None:
 def _check_options(args: argparse.Namespace) -> None:
     import math
 
-    from workflows.runtime import UserError
+    from beadrod.workflows.runtime import UserError
 
     if not N_FREQ[0] <= args.n_freq <= N_FREQ[1]:
         raise UserError(f"--n-freq must be an integer from {N_FREQ[0]} to {N_FREQ[1]}, "
@@ -94,12 +94,12 @@ def _check_options(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from models.scenes import SceneError
-    from models.simulate import PlasticityError, build_simulator
-    from workflows._io import write_json
-    from workflows.cmd_scene import resolve_scene
-    from workflows.outdir import check_out
-    from workflows.runtime import UserError
+    from beadrod.models.scenes import SceneError
+    from beadrod.models.simulate import PlasticityError, build_simulator
+    from beadrod.workflows._io import write_json
+    from beadrod.workflows.cmd_scene import resolve_scene
+    from beadrod.workflows.outdir import check_out
+    from beadrod.workflows.runtime import UserError
 
     _check_options(args)
     if args.out is not None:

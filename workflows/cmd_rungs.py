@@ -30,7 +30,7 @@ def _run(args: argparse.Namespace) -> int:
     check_out(out, force=args.force, command="rungs")
     runtime.setup_logging(out, cfg["quiet"])
     runtime.host_devices(n_devices(cfg))  # before JAX starts
-    from inference.sample import configure
+    from beadrod.inference.sample import configure
 
     configure(n_devices(cfg))
     from . import lawfiles

@@ -51,8 +51,8 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
     scene's value, else the prior median; ``sources`` says which): static overlap, tangent
     stiffness and linear resonance under the load, and the linear Q where the law has a
     loss channel."""
-    from models.nominal import checked_parameters, linear_state
-    from models.registry import laws
+    from beadrod.models.nominal import checked_parameters, linear_state
+    from beadrod.models.registry import laws
 
     from .cmd_shift import scene_keywords
 
@@ -83,7 +83,7 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
 def _per_young(scene, given: dict[str, float]) -> dict:
     # the elastic sphere (Hertz) is the reference state of the non-law quantities (forces,
     # rod, damping), as in the paper's Sec. 4
-    from models import adhesion, hertz, rod, viscoelastic
+    from beadrod.models import adhesion, hertz, rod, viscoelastic
 
     m, load, es, r = scene.mass, scene.load, scene.e_star, scene.radius
     gamma = scene.surface_energy
@@ -145,7 +145,7 @@ def _per_young(scene, given: dict[str, float]) -> dict:
 
 
 def _speeds(mat):
-    from models.materials import wave_speeds
+    from beadrod.models.materials import wave_speeds
     return wave_speeds(mat.young, mat.poisson, mat.density)
 
 
@@ -153,7 +153,7 @@ def check_given(given: dict[str, float]) -> dict[str, float]:
     """``given`` (as floats) if every key is a parameter of some registered law and each
     value is a value of that parameter for every law that has it
     (workflows.cmd_shift.check_param); ValueError otherwise."""
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     from .cmd_shift import check_param
 
@@ -223,8 +223,8 @@ def _json_safe(v):
 
 
 def run(args: argparse.Namespace) -> int:
-    from models.scenes import SceneError
-    from workflows.cli import UserError
+    from beadrod.models.scenes import SceneError
+    from beadrod.workflows.cli import UserError
 
     from .cmd_shift import parse_params
 

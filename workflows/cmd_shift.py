@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from models.rungs import RUNGS
+from beadrod.models.rungs import RUNGS
 
 from . import lawfiles
 
@@ -104,7 +104,7 @@ def check_param(law: Any, name: str, value: float) -> float:
 
 def check_method(law: Any, method: str) -> str:
     """The law's rung for ``method``; ValueError if the law has no such rung."""
-    from models.rungs import check_rung
+    from beadrod.models.rungs import check_rung
 
     rung = check_rung(method)
     if rung not in law.rungs:
@@ -117,7 +117,7 @@ def scene_keywords(scene: Any) -> dict[str, float]:
     """The scene quantities a law's nominal parameters may come from, by name
     (inference.likelihood.scene_quantities, plus ``viscosity`` [Pa s] where the scene
     gives one)."""
-    from inference.likelihood import scene_quantities
+    from beadrod.inference.likelihood import scene_quantities
 
     out = scene_quantities(scene)
     if scene.viscosity is not None:
@@ -155,8 +155,8 @@ def given_values(law: Any, params: dict[str, float],
     shorthand ``flags`` (:data:`FLAGS`, None: not given), unchecked; ValueError for a
     flag the law has no use for, a name it does not take (naming those it takes), two
     values for one name, or a scene quantity whose every use is overridden."""
-    from models.law import SCENE_KEYS
-    from models.nominal import scene_names
+    from beadrod.models.law import SCENE_KEYS
+    from beadrod.models.nominal import scene_names
 
     takes = scene_names(law)
     source = {k: f"--param {k}={_fmt(v)}" for k, v in params.items()}
@@ -201,7 +201,7 @@ def resolve_scene(path: Path | str | None, builtin: str | None, *,
                   flag: str = "a scene file"):
     """(scene, source) named by a file or a built-in name (default: the paper's); both
     given is refused (``flag``: how the command names the file)."""
-    from models.scenes import builtin_scene, load_scene
+    from beadrod.models.scenes import builtin_scene, load_scene
 
     if path is not None and builtin is not None:
         raise ValueError(f"give either {flag} or --builtin, not both")
@@ -225,8 +225,8 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     :func:`check_param`, models.nominal.check_scene_values)."""
     import numpy as np
 
-    from models.nominal import check_scene_values, checked_parameters, linear_state
-    from models.registry import get_law
+    from beadrod.models.nominal import check_scene_values, checked_parameters, linear_state
+    from beadrod.models.registry import get_law
 
     scene = resolve_scene(scene_path, builtin, flag="--scene")[0]
     lawfiles.load(law_files or [], scene)

@@ -13,8 +13,8 @@ __all__ = ["register"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from data.load import MEASUREMENTS, SCENE, TRUTH
-    from data.synth import DEFAULT_SEED, WORLDS, write_world
+    from beadrod.data.load import MEASUREMENTS, SCENE, TRUTH
+    from beadrod.data.synth import DEFAULT_SEED, WORLDS, write_world
 
     from .outdir import check_out
     from .runtime import UserError

@@ -71,8 +71,8 @@ def _lines(values) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from data.load import load_dataset
-    from data.process import process
+    from beadrod.data.load import load_dataset
+    from beadrod.data.process import process
 
     t0 = time.perf_counter()
     ds = load_dataset(args.dir)

@@ -35,7 +35,7 @@ def figure_laws(names: Any = ()) -> list[Any]:
     """The laws a figure draws at their nominal parameters: every law of the default
     comparison plus the registered laws among ``names`` (the fitted ones), in registry
     order."""
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     names = set(names)
     return [law for law in laws() if law.in_default_comparison or law.name in names]
@@ -44,7 +44,7 @@ def figure_laws(names: Any = ()) -> list[Any]:
 def _nominal_state(law: Any, sc: dict[str, float]) -> dict[str, Any] | None:
     """The law's linear state at its nominal parameters (models.nominal), None (and a
     warning) where it cannot be computed, so that one law does not cost every figure."""
-    from models.nominal import checked_parameters, linear_state
+    from beadrod.models.nominal import checked_parameters, linear_state
 
     try:
         # a scene value outside the law's domain (a surface energy of 0) is a ValueError,
@@ -176,7 +176,7 @@ def exponent_law(names: Any = ()) -> Any:
     """The law whose force exponent the max_shift_vs_n figure (paper Fig. 5) is drawn
     against: the law with a parameter named ``n``, a fitted one (among ``names``) first;
     None if no registered law has one."""
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     names = set(names)
     with_n = [law for law in laws() if "n" in law.param_names]
@@ -185,8 +185,8 @@ def exponent_law(names: Any = ()) -> Any:
 
 
 def _theory_figures(save, runs, specs, inputs, scene) -> None:
-    from models import shift
-    from models.backbone_table import backbone_shift_fast
+    from beadrod.models import shift
+    from beadrod.models.backbone_table import backbone_shift_fast
 
     x_grid = figure_data.THEORY_X
     fitted_laws = {getattr(spec, "law", None) for spec in specs.values()}

@@ -67,9 +67,9 @@ def data_block(ds: Any) -> dict[str, Any]:
 def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str | None = None):
     """Draws of ``name`` (default: the law's ``tension_param``) from one NUTS fit of the
     tension's shared law (ModelSpec keywords ``spec_kw``, the law among them)."""
-    from inference.numpyro_models import ModelSpec, build_model
-    from inference.sample import run_nuts
-    from models.registry import get_law
+    from beadrod.inference.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.sample import run_nuts
+    from beadrod.models.registry import get_law
 
     s = cfg["sampling"]
     spec = ModelSpec(**spec_kw)
@@ -83,14 +83,14 @@ def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str | None = None):
 def _prior_draws(param: str, n: int, seed: int) -> np.ndarray:
     import jax
 
-    from inference.priors import prior
+    from beadrod.inference.priors import prior
 
     return np.asarray(prior(param, {}).sample(jax.random.PRNGKey(seed), (n,)))
 
 
 def _pair(pair: tuple[str, str] | None) -> tuple[str, str]:
     """The tension's (shared, split) law names: ``pair``, else the registry's."""
-    from models.registry import tension_pair
+    from beadrod.models.registry import tension_pair
 
     found = pair or tension_pair()
     if found is None:
@@ -112,8 +112,8 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
     shift alone; otherwise (and if cfg asks for it) the paper's Eq. 25 shared/split pair
     and its shift-alone fit. ``pair``: the (shared, split) law names
     (models.registry.tension_pair when None)."""
-    from inference.numpyro_models import ModelSpec
-    from inference.tension import ETA_IN_SHIFT
+    from beadrod.inference.numpyro_models import ModelSpec
+    from beadrod.inference.tension import ETA_IN_SHIFT
 
     from .parallel import Job
 
@@ -173,8 +173,8 @@ def tension(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, cfg: dict[str
 
 def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, eta_shift,
                    out: Path) -> dict[str, Any]:
-    from inference.tension import ETA_IN_SHIFT, analyse_tension
-    from models.registry import get_law
+    from beadrod.inference.tension import ETA_IN_SHIFT, analyse_tension
+    from beadrod.models.registry import get_law
 
     from .report_tension import tension_sentences
 
@@ -211,7 +211,7 @@ def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, e
 
 def fit_checks(runs: dict[str, Any]) -> dict[str, Any]:
     """LOO-PIT calibration of each law's shift predictive (inference.compare), by law."""
-    from inference.compare import loo_pit_summary
+    from beadrod.inference.compare import loo_pit_summary
 
     out: dict[str, Any] = {}
     for name, run in runs.items():

@@ -91,8 +91,8 @@ class _Jobs:
             begin(log, job.key, "%s: NUTS for the tension", job.key)
             value = nuts_eta(job.spec, inputs, job.cfg, job.seed_offset)
         elif job.kind == "ns":
-            from inference.evidence import nested_sampling_log_z
-            from inference.numpyro_models import build_model
+            from beadrod.inference.evidence import nested_sampling_log_z
+            from beadrod.inference.numpyro_models import build_model
 
             begin(log, job.key, "%s: nested sampling", job.key)
             value = nested_sampling_log_z(build_model(job.spec), {"data": inputs},
@@ -105,7 +105,7 @@ class _Jobs:
         return value
 
     def run_in_worker(self, job: Job, resume: bool) -> Any:
-        from inference.likelihood import model_inputs
+        from beadrod.inference.likelihood import model_inputs
 
         from . import lawfiles
 
@@ -180,8 +180,8 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     side (workflows.parallel; 1 = in this process); the numbers do not depend on it.
     The tension needs both laws of the registry's tension pair (models.registry.tension_pair:
     the viscoelastic ones) and Q in the likelihood (likelihood.use_q)."""
-    from inference.likelihood import model_inputs
-    from models.registry import tension_pair
+    from beadrod.inference.likelihood import model_inputs
+    from beadrod.models.registry import tension_pair
 
     from . import compare_outputs
 

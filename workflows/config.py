@@ -17,7 +17,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from models.rungs import DEFAULT_RUNG, FIT_RUNGS
+from beadrod.models.rungs import DEFAULT_RUNG, FIT_RUNGS
 
 __all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFERENCES",
            "ConfigError", "load_config", "merge", "resolve", "to_toml", "leaf_keys",
@@ -348,7 +348,7 @@ def load_config(path: str | Path) -> dict[str, Any]:
     read it is one line naming it (:func:`models.tomlfile.read_toml`)."""
     # the scene files' reader (models.tomlfile: imported here, the parser imports no model
     # module but models.rungs): a folder, non-UTF-8 bytes, nesting too deep are one line
-    from models.tomlfile import read_toml
+    from beadrod.models.tomlfile import read_toml
 
     path = Path(path)
     cfg = read_toml(path, error=ConfigError, what="config file",

@@ -68,7 +68,7 @@ def shift_panel(name: str, label: str, spec: Any, idata: Any, inputs: dict[str, 
     ``offset_down``. Residuals are standardised by the posterior predictive draws of each
     sweep.
     """
-    from inference.numpyro_models import curve_draws
+    from beadrod.inference.numpyro_models import curve_draws
 
     small = thin(idata, max_draws)
     post = small.posterior
@@ -112,7 +112,7 @@ def standardised_residuals(idata: Any, y: np.ndarray) -> np.ndarray | None:
 def fitted_curve(spec: Any, idata: Any, x: np.ndarray, inputs: dict[str, Any], *,
                  max_draws: int = 600) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q05, median, q95) of a fitted law's noise-free up-sweep shift on ``x``."""
-    from inference.numpyro_models import curve_draws
+    from beadrod.inference.numpyro_models import curve_draws
 
     c = np.asarray(curve_draws(spec, thin(idata, max_draws), np.asarray(x, float), inputs))
     q05, q50, q95 = np.quantile(c, [0.05, 0.5, 0.95], axis=0)

@@ -35,7 +35,7 @@ log = logging.getLogger("beadrod")
 def _init(rc: dict[str, Any]) -> None:
     import matplotlib
 
-    from workflows.runtime import exit_with_parent
+    from beadrod.workflows.runtime import exit_with_parent
 
     exit_with_parent()  # a parent killed with SIGKILL leaves no orphan writing figures
 
@@ -45,7 +45,7 @@ def _init(rc: dict[str, Any]) -> None:
 
 def _write(blob: bytes, path: str) -> list[tuple[type[Warning], str]]:
     # the warnings the write raised, for the parent to raise again (a worker has no log)
-    from workflows.plots import save_figure  # Agg and pyplot, as in the parent
+    from beadrod.workflows.plots import save_figure  # Agg and pyplot, as in the parent
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -74,7 +74,7 @@ class FigureWriter:
         return self
 
     def save(self, fig: Any, path: str | Path) -> None:
-        from workflows.plots import plt, save_figure
+        from beadrod.workflows.plots import plt, save_figure
 
         if self._pool is None:
             save_figure(fig, path)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import arviz as az
 
-from data.io import atomic_path
+from beadrod.data.io import atomic_path
 
 __all__ = ["save_idata", "load_idata"]
 

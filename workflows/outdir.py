@@ -98,7 +98,7 @@ def manifest_entries(out: Path) -> dict[str, str | None] | None:
 
 
 def _sha256(path: Path) -> str:
-    from data.io import file_sha256
+    from beadrod.data.io import file_sha256
 
     return file_sha256(path)
 
@@ -228,7 +228,7 @@ def check_out(out: Path, *, force: bool, resume: bool = False,
     held = _lock(out, command)
     try:
         _prepare(out, force=force, resume=resume, outputs=outputs)
-        from data.io import MANIFEST_ENV, record_written
+        from beadrod.data.io import MANIFEST_ENV, record_written
 
         os.environ[MANIFEST_ENV] = os.path.abspath(out / MANIFEST_FILE)
         log = out / LOG_FILE

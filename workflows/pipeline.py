@@ -52,7 +52,7 @@ MODE_GAP_WARN = 3.0
 def model_names() -> list[str]:
     """The comparison's models: every registered law (built in or from a law file), then
     the law-free baseline. The law registry is the one list."""
-    from inference.numpyro_models import model_names as names
+    from beadrod.inference.numpyro_models import model_names as names
 
     return list(names())
 
@@ -61,20 +61,20 @@ def default_model_names() -> list[str]:
     """The models ``beadrod compare`` fits when no --laws are given: every registered law
     whose ``in_default_comparison`` is set (a law says in its description why not), then
     the baseline."""
-    from models.registry import get_law
+    from beadrod.models.registry import get_law
 
     return [n for n in model_names()
             if n == "baseline" or get_law(n).in_default_comparison]
 
 
 def model_labels() -> dict[str, str]:
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     return {**{law.name: law.label for law in laws()}, "baseline": BASELINE_LABEL}
 
 
 def param_units() -> dict[str, str]:
-    from models.registry import laws
+    from beadrod.models.registry import laws
 
     units = dict(NUISANCE_UNITS)
     for law in laws():
@@ -98,8 +98,8 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
     """ModelSpec per requested name, every law at the same ``rung`` (the baseline has no
     rung). A law that cannot run at ``rung`` is refused with a clear message, never
     swapped for another rung."""
-    from inference.numpyro_models import BASELINE, ModelSpec
-    from models.registry import check_rung, get_law
+    from beadrod.inference.numpyro_models import BASELINE, ModelSpec
+    from beadrod.models.registry import check_rung, get_law
 
     check_rung(rung, fit=True)
     known = model_names()
@@ -130,8 +130,7 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
 
 def load_data(cfg: dict[str, Any]):
     """ProcessedDataset from ``cfg['data']`` (None: the embedded paper_like world)."""
-    import data as bd
-
+    from beadrod import data as bd
     opts = {"two_percent_rule": cfg["likelihood"]["two_percent_rule"],
             "shift_reference": cfg["likelihood"]["shift_reference"]}
     if cfg["data"] is None:
@@ -209,9 +208,7 @@ def code_digest(extra: tuple[str, ...] = ()) -> str:
     """sha256 of the code a fit runs: every file of the ``models`` and ``inference``
     packages (sources and tables) and the files ``extra`` (a law file's path), so that a
     resumed run does not reuse a fit made by other code under the same version."""
-    import inference
-    import models
-
+    from beadrod import inference, models
     h = hashlib.sha256()
     roots = [Path(models.__file__).parent, Path(inference.__file__).parent]
     files = [f for r in roots for f in sorted(r.rglob("*"))
@@ -230,7 +227,7 @@ def _cache_key(name: str, spec: Any, cfg: dict[str, Any], inputs: dict[str, Any]
     the code (:func:`code_digest`, with the law's own file for a law file's law)."""
     from dataclasses import asdict
 
-    from inference.numpyro_models import law_of
+    from beadrod.inference.numpyro_models import law_of
 
     law = law_of(spec)
     source = (law.source,) if law is not None and law.source != "built-in" else ()
@@ -281,12 +278,12 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
     An evidence estimator that fails (bridge sampling that does not converge, ...) marks
     the law FAILED with the reason and the fit is kept; the caller carries on. ``job``
     names the fit in the progress records (workflows.progress; default ``name``)."""
-    from inference import diagnostics
-    from inference.bridge import bridge_sampling_log_z
-    from inference.compare import loo_pit_summary
-    from inference.evidence import combined_agreement, nested_sampling_log_z, smc_log_z
-    from inference.numpyro_models import build_model
-    from inference.sample import run_nuts
+    from beadrod.inference import diagnostics
+    from beadrod.inference.bridge import bridge_sampling_log_z
+    from beadrod.inference.compare import loo_pit_summary
+    from beadrod.inference.evidence import combined_agreement, nested_sampling_log_z, smc_log_z
+    from beadrod.inference.numpyro_models import build_model
+    from beadrod.inference.sample import run_nuts
 
     from .idata_io import save_idata
     from .progress import begin, done
@@ -436,8 +433,8 @@ def job_order(job: Any) -> tuple[float, int]:
     finish is a short one. A fit or evidence job costs its law's ``cost`` (the baseline
     :data:`BASELINE_COST`); among equal costs the tension's Eq. 25 fits go first (they
     are the slower), and jobs of no law (the tension's extra draws) run last."""
-    from inference.numpyro_models import BASELINE
-    from models.registry import get_law, law_names
+    from beadrod.inference.numpyro_models import BASELINE
+    from beadrod.models.registry import get_law, law_names
 
     law = getattr(job.spec, "law", None)  # a ModelSpec; the extra draws carry keywords
     if law == BASELINE:

@@ -19,8 +19,8 @@ matplotlib.use("Agg")  # headless before pyplot is imported anywhere below
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from workflows._io import atomic_path  # noqa: E402
-from workflows.plots_data import (  # noqa: E402
+from beadrod.workflows._io import atomic_path  # noqa: E402
+from beadrod.workflows.plots_data import (  # noqa: E402
     DIRECTION_NAMES,
     Curve,
     fig_accuracy_cost,
@@ -32,7 +32,7 @@ from workflows.plots_data import (  # noqa: E402
     fig_shift_curves,
     law_color,
 )
-from workflows.plots_inference import (  # noqa: E402
+from beadrod.workflows.plots_inference import (  # noqa: E402
     TENSION_COLORS,
     fig_eta_tension,
     fig_evidence,
@@ -41,7 +41,7 @@ from workflows.plots_inference import (  # noqa: E402
     fig_rank,
     posterior_columns,
 )
-from workflows.plots_ppc import ShiftPanel, fig_shift_ppc  # noqa: E402
+from beadrod.workflows.plots_ppc import ShiftPanel, fig_shift_ppc  # noqa: E402
 
 __all__ = [
     "save_figure",

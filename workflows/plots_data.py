@@ -23,7 +23,7 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
-from workflows import styles  # noqa: E402
+from beadrod.workflows import styles  # noqa: E402
 
 __all__ = [
     "DIRECTION_NAMES",

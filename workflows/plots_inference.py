@@ -17,8 +17,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from workflows import styles
-from workflows.plots_data import legend_outside, new_axes, plt
+from beadrod.workflows import styles
+from beadrod.workflows.plots_data import legend_outside, new_axes, plt
 
 __all__ = [
     "TENSION_COLORS",

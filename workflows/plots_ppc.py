@@ -18,8 +18,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from workflows import styles
-from workflows.plots_data import directions, legend_outside, plt, scatter_by_direction
+from beadrod.workflows import styles
+from beadrod.workflows.plots_data import directions, legend_outside, plt, scatter_by_direction
 
 __all__ = ["ShiftPanel", "fig_shift_ppc", "RESIDUAL_LIMIT"]
 

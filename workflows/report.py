@@ -23,8 +23,8 @@ import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from workflows._io import write_text
-from workflows.report_params import (
+from beadrod.workflows._io import write_text
+from beadrod.workflows.report_params import (
     GLOSSARY,
     glossary_table,
     param_table,
@@ -32,8 +32,8 @@ from workflows.report_params import (
     priors_table,
     truth_tables,
 )
-from workflows.report_render import Block, blocks_to_html, blocks_to_markdown
-from workflows.report_tables import (
+from beadrod.workflows.report_render import Block, blocks_to_html, blocks_to_markdown
+from beadrod.workflows.report_tables import (
     DASH,
     FAILED,
     comparison_block,
@@ -50,7 +50,7 @@ from workflows.report_tables import (
     timings_table,
     to_float,
 )
-from workflows.report_tension import tension_sentences, tension_table
+from beadrod.workflows.report_tension import tension_sentences, tension_table
 
 __all__ = ["render_report", "comparison_table", "markdown_table", "report_blocks",
            "statistical_warnings", "blocks_to_markdown", "blocks_to_html"]

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from inference.variables import VARIABLES
+from beadrod.inference.variables import VARIABLES
 
 from .report_tables import DASH, fmt_num, fmt_pm, is_failed, law_label, pm_decimals, to_float
 
@@ -115,7 +115,7 @@ _PRIOR_CLAUSE = re.compile(r"\s*Prior [A-Za-z]+\(.*?\)[^:.]*:\s*")
 def law_param(name: str) -> Any | None:
     """The :class:`models.law.Param` of a registered law's parameter ``name`` (None for the
     nuisance parameters of inference.priors)."""
-    from models import registry
+    from beadrod.models import registry
 
     for law in registry.laws():
         if name in law.param_names:
@@ -246,7 +246,7 @@ def prior_reasons(doc: str) -> dict[str, str]:
 
 def priors_table(laws: Sequence[Mapping]) -> tuple[list[str], list[list[str]], list[bool]]:
     """Every prior of every fitted law: parameter, distribution, laws, why."""
-    from inference import priors
+    from beadrod.inference import priors
 
     reasons = prior_reasons(priors.__doc__ or "")
     used: dict[str, list[str]] = {}
@@ -331,7 +331,7 @@ def param_table(law: Mapping, truth: Mapping | None
 def _bounds(name: str) -> tuple[float, float, bool] | None:
     """Hard (finite, both-sided) prior bounds of ``name`` [SI] and whether they are on a
     log scale; None for priors with an unbounded side."""
-    from inference.priors import prior
+    from beadrod.inference.priors import prior
 
     try:
         d = prior(name)

@@ -17,8 +17,8 @@ import re
 from collections.abc import Sequence
 from pathlib import Path
 
-from workflows.markdown import code_fence, md_escape
-from workflows.report_tables import FAILED, markdown_table
+from beadrod.workflows.markdown import code_fence, md_escape
+from beadrod.workflows.report_tables import FAILED, markdown_table
 
 __all__ = ["Block", "blocks_to_markdown", "blocks_to_html"]
 

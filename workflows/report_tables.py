@@ -22,8 +22,8 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from inference.compare import rank_evidence
-from workflows.markdown import md_escape
+from beadrod.inference.compare import rank_evidence
+from beadrod.workflows.markdown import md_escape
 
 __all__ = ["DASH", "FAILED", "to_float", "fmt_num", "fmt_pm", "pm_decimals", "is_failed",
            "is_baseline", "status_cell", "law_label", "markdown_table", "ranking",

@@ -44,7 +44,7 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
     Why the fast path: without one a rung is the generic quadrature of models.generic at
     every likelihood call; the rough sphere's first order so ran NUTS for over 19 minutes
     without finishing on the 2-core CPU, where its backbone fit takes 86 s."""
-    from models.registry import get_law
+    from beadrod.models.registry import get_law
 
     from .pipeline import default_model_names
 
@@ -70,7 +70,7 @@ def run_rungs(cfg: dict[str, Any], out: Path, rungs: list[str]) -> dict[str, Any
     """Fit ``cfg['laws']`` (default: every law but the baseline) at each of ``rungs`` into
     ``out/<rung>/`` (as compare does: NUTS, gate, LOO, evidence) and write
     ``rungs.md``, ``rungs.csv`` and ``rungs.json`` into ``out``. Returns the JSON dict."""
-    from inference.likelihood import model_inputs
+    from beadrod.inference.likelihood import model_inputs
 
     from .comparison import JOBS, job_steps, model_specs, n_devices
     from .parallel import Job, resolve_workers, run_jobs

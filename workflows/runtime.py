@@ -236,6 +236,6 @@ def init_worker(n_devices: int, queue: Any) -> None:
     enable_x64()
     quiet_libraries()
     log_to_queue(queue)
-    from inference.sample import configure
+    from beadrod.inference.sample import configure
 
     configure(n_devices)

@@ -13,8 +13,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from data.io import atomic_path, write_json  # noqa: E402
-from inference.sbc import SBCResult, ecdf_difference  # noqa: E402
+from beadrod.data.io import atomic_path, write_json  # noqa: E402
+from beadrod.inference.sbc import SBCResult, ecdf_difference  # noqa: E402
 
 __all__ = ["plot_ecdf", "write_sbc_json"]
 

@@ -74,7 +74,7 @@ _ASSIGNED: dict[str, str] = {}
 
 def _registry_laws() -> list[Any]:
     try:
-        from models import registry
+        from beadrod.models import registry
     except ImportError:
         return []
     fn = getattr(registry, "laws", None)
@@ -89,7 +89,7 @@ def _registry_law(name: str) -> Any | None:
 
 def _pipeline_labels() -> dict[str, str]:
     try:
-        from workflows import pipeline
+        from beadrod.workflows import pipeline
     except ImportError:
         return {}
     return dict(getattr(pipeline, "LABELS", {}))
@@ -99,7 +99,7 @@ def model_names() -> list[str]:
     """The comparison's models in their fixed order (``pipeline.MODEL_SPECS``), then any
     other registered law."""
     try:
-        from workflows import pipeline
+        from beadrod.workflows import pipeline
 
         names = list(getattr(pipeline, "MODEL_SPECS", {}))
     except ImportError:
