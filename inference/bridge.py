@@ -157,7 +157,7 @@ def bridge_sampling_log_z(
                   for k, v in draws.items()}
     known = log_density is not None
     # one compiled program (one trace of the model): eagerly, the model's every operation
-    # is dispatched (and its loops compiled) one by one, 10-15 s for the adhesive laws
+    # is dispatched (and its loops compiled) one by one, slow for the adhesive laws
     program = _program(model, model_kwargs, chains, half, n2, known)
     mean, chol, bridge, prop, lq_bridge, lq_prop = (
         None if a is None else np.asarray(a)

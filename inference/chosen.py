@@ -3,8 +3,8 @@
 Why. The folds (:mod:`inference.fold`, :mod:`inference.residual_fold`) choose per step
 between a table (cheap) and the exact curve (costly) with ``lax.cond``. Differentiated
 through, the cond makes the forward pass carry the residuals of both branches (the exact
-curve's many intermediates, zeros when the table is taken) every step (2.7 us of JKR's
-gradient). Here the branches return the value and its derivative in z themselves, and the
+curve's many intermediates, zeros when the table is taken) every step. Here the branches
+return the value and its derivative in z themselves, and the
 derivative rule contracts that with z's tangent: the cond carries nothing else.
 """
 

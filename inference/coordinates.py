@@ -6,7 +6,7 @@ its own units. The dense mass matrix is adapted with Stan's regularisation, (n/(
 Sigma + 1e-3 (5/(n + 5)) I over a window of n draws: a coordinate whose posterior sd is
 far below sqrt(1e-3 * 5/205) = 5e-3 (the last window of a 500-draw warmup) is given a
 mass-matrix scale of ~5e-3 instead, and the step size shrinks to match it. The down-sweep
-offset [-] has a posterior sd of 4e-5 on hertz_dynamics, which cost a step size of 0.005
+offset [-] has a posterior sd of 4e-5 on hertz_dynamics, which costs a step size of 0.005
 and ~800 leapfrog steps per draw; a mean resonance in Hz (posterior sd 30 Hz) is the
 opposite case, and the adaptation, started at the identity, never reaches it (R-hat 1.06,
 bulk ESS 55 on hertz_dynamics).

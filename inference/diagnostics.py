@@ -89,7 +89,7 @@ def _gate_stats(post: Any, var_names: list[str] | None):
     if var_names is None:
         var_names = [v for v, m in _varying(post, list(post)).items() if m.any()]
     # vectorised (inference.mcmc_stats; arviz's definitions): az.rhat / az.ess loop over
-    # the ~500 elements of a posterior in Python, 2-3 s per fit
+    # the ~500 elements of a posterior in Python
     masks = _varying(post, var_names)
     return masks, {v: mcmc_stats.gate_stats(np.asarray(post[v], float)) for v in var_names}
 

@@ -3,9 +3,9 @@ log-likelihood, the posterior predictive and the prior (with its predictive).
 
 Why one program. Evaluated draw by draw outside ``jit`` (``Predictive``,
 ``az.from_numpyro``'s log-likelihood and the eager model run it makes to find the
-observations), the rough-sphere law cost ~30 s per fit on the 2-core CPU, most of it
-dispatching single operations of its root solves; traced once and mapped over the draws
-in batches it costs ~5 s cold and ~1.5 s once compiled.
+observations), most of the time goes to dispatching single operations (a law's root
+solves, say); traced once and mapped over the draws in batches, they compile into one
+program.
 
 Only the observation sites count (``inference.likelihood.OBSERVED_SITES``): a
 ``numpyro.factor`` (the law's domain) is an observed site to numpyro, but it is no
@@ -55,7 +55,7 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
     lead = np.shape(samples[latents[0]])[:2] if latents else (1, 1)
     n = int(np.prod(lead))
     # through host memory: draws of parallel chains are sharded over the host devices,
-    # and a program fed sharded arrays runs partitioned (measured 6x slower)
+    # and a program fed sharded arrays runs partitioned, far slower
     flat = {k: jnp.asarray(np.reshape(np.asarray(samples[k]), (n, *np.shape(samples[k])[2:])))
             for k in latents}
 
@@ -89,8 +89,8 @@ def fit_draws(model: Callable, data: dict[str, Any], pdata: dict[str, Any],
     def program(flat, k_post, k_prior):
         # the prior's draws go through the posterior's function (its predictive trace, given
         # latents drawn from the prior, is the prior trace): one copy of the model's
-        # predictive in the program, not two (the draws program compiled in 2.8 s for Hertz
-        # against 6.7 s with a map of its own for the prior)
+        # predictive in the program, not two (a map of its own for the prior would double
+        # the compilation)
         keys = jax.random.split(k_post, n)
         if with_prior:
             k_lat, k_prior = jax.random.split(k_prior)

@@ -61,7 +61,7 @@ class EvidenceResult:
 
 def _sample_sites(model: Callable, model_kwargs: dict | None) -> list[tuple[str, bool]]:
     # (name, is_observed) of every sample site, from an abstract trace: the model runs on
-    # tracers, not op by op (eagerly, a tabulated law's model took ~9 s to run once)
+    # tracers, not op by op (eagerly, a tabulated law's model is slow to run even once)
     sites: list[tuple[str, bool]] = []
 
     def run():

@@ -10,14 +10,13 @@ Before sampling, the curve is therefore tabulated once along that parameter: in
 z = ln theta, ``CELLS`` equal cells over the prior's central 1 - 2e-12, a cubic Hermite
 piece per cell and point from the exact values and z-derivatives at the cell ends. A
 step then reads one cell (4 numbers per point, four contiguous row slices) instead of
-locating every point in a two-dimensional table, which on the CPU cost 4-10 times more.
+locating every point in a two-dimensional table, which on the CPU costs several times more.
 (:mod:`inference.steps` folds the per-protocol overlap map with the curve, where it
 depends on the same parameter.)
 
-Cost. Two details decide it on the CPU (one-core value + gradient of JKR's model on the
-embedded data, 454 sweeps: 11.2 us before both, 3.8 after; Hertz 2.0): the coefficients
-are kept as four (cells, points) arrays, one row slice each (a slice of one
-(cells, points, 4) array read with stride 4 cost 5x more), and the derivative in z is a
+Cost. Two details decide it on the CPU: the coefficients are kept as four
+(cells, points) arrays, one row slice each (a slice of one (cells, points, 4) array read
+with stride 4 costs several times more), and the derivative in z is a
 rule of its own (``custom_jvp``) that returns the cubic's slope from inside the
 ``lax.cond``: differentiated through, the cond makes the forward pass carry the
 residuals of both branches (the exact curve's intermediates, zeros when the fold is
@@ -112,8 +111,8 @@ def shape_parameters(curve: Callable[[dict], jnp.ndarray], draws: list[dict]) ->
         return tuple(k for k in names if k in reached)
     probed = names if reached is None else [k for k in names if k in reached]
     # one program for every draw and probed parameter (a unit tangent each, vmapped;
-    # inference.programs): run op by op, the curve's forward derivatives took 7.8 of the
-    # 11.3 s that JKR's fold cost to build (one core; compiled once, 3.2 s)
+    # inference.programs): run op by op, the curve's forward derivatives would be most
+    # of the fold's build
     unit = {k: jnp.stack([jnp.full(jnp.shape(args[0][k]), float(k == j)) for j in probed])
             for k in names}
     derivative = jax.vmap(lambda theta, t: jax.jvp(curve, (theta,), (t,))[1],
@@ -130,7 +129,7 @@ def _reached(curve: Callable[[dict], jnp.ndarray], theta: dict) -> set[str] | No
     # the parameters whose values flow into the outputs of curve's jaxpr (an equation's
     # outputs depend on all its inputs: nested programs are taken whole, which can only
     # add parameters); None where the curve cannot be traced so (then every parameter is
-    # probed). Tracing costs milliseconds where the numerical probe compiles for seconds
+    # probed). Tracing is far cheaper than compiling the numerical probe
     names = list(theta)
     try:
         closed = jax.make_jaxpr(lambda *v: curve(dict(zip(names, v))))(
@@ -255,7 +254,7 @@ def _locate(fold: Fold, z):
 
 def _rows(fold: Fold, flat):
     # the sub-cell's four coefficient rows, one slice of each (cells, points) array: on
-    # the CPU one slice of the (cells, points, 4) array, then strided reads, cost 5x more
+    # the CPU one slice of the (cells, points, 4) array, then strided reads, cost more
     return [jax.lax.dynamic_index_in_dim(jnp.asarray(fold.coef[..., m]), flat, 0,
                                          keepdims=False) for m in range(4)]
 

@@ -4,8 +4,8 @@ Buerkner 2021, "Rank-normalization, folding, and localization", Bayesian Analysi
 
 Why not ``az.rhat`` / ``az.ess``: arviz evaluates them element by element in Python, and
 a fit's posterior holds ~500 elements (one predicted shift per drive sweep, one overlap
-per protocol), which the gate checks too: 2.4 s for the rough sphere's fit on the
-2-core CPU, against 1.2 s here (:func:`gate_stats`; most of it one sort per element).
+per protocol), which the gate checks too; here they are vectorised (:func:`gate_stats`;
+most of the cost is one sort per element).
 The definitions are arviz's (0.23) step for step, Geyer's initial positive and monotone
 sequences included, and the tests hold them to arviz to 1e-10.
 """

@@ -2,11 +2,8 @@
 
 Why. NUTS explores the basin it starts in, and bridge sampling (the default evidence)
 fits one Normal to those draws, so a run started at the prior median reports the nearest
-mode as if it were the only one. On the embedded data the rough-sphere law had a second
-mode (sigma at 6.8x the scene's roughness, its summits carrying the load below the
-table's range) 54 nats above the one the median start found; nested sampling saw it,
-bridge sampling could not. That mode is now outside the law's domain (models.law
-``domains``); the search is what catches the next one.
+mode as if it were the only one, and bridge sampling misses a mode that nested sampling
+sees. The search finds the deepest mode to start from, and reports the others.
 
 Method. ``starts`` points are drawn from the prior, mapped to numpyro's unconstrained
 space and spread about their coordinate-wise median by ``spread`` (overdispersed starts,
@@ -19,10 +16,8 @@ so a caller can say when a second mode comes close (its mass is then missing fro
 evidence of a one-mode sampler).
 
 Cost: ``starts x steps`` gradient evaluations, vectorised, in one program whose tracing
-and compilation dominate: on the 2-core machine 1-4 s per law with a warm compilation
-cache (the rough sphere ~5 s alone, ~10 s beside another fit), 3-8 s cold (the rough
-sphere ~16 s). The prior draws, the unconstrained layout and both density evaluations are
-inside that program: each apart traced the model again.
+and compilation dominate. The prior draws, the unconstrained layout and both density
+evaluations are inside that program: each apart would trace the model again.
 """
 
 from __future__ import annotations
@@ -116,8 +111,8 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
     @jax.jit
     def run(key):
         # prior draws -> unconstrained, spread about their median: all in the one program,
-        # which traces the model five times instead of the eight it took with the draws
-        # (Predictive), the layout (eval_shape) and the two density calls apart
+        # which traces the model fewer times than the draws (Predictive), the layout
+        # (eval_shape) and the two density calls would apart
         draws = jax.vmap(prior_draw)(jax.random.split(key, starts))
         x0, unravel = flatten_unconstrained(model, kw, draws)
         layout.append(unravel)
@@ -133,9 +128,8 @@ def find_modes(model: Callable, data: dict[str, Any], *, starts: int = 16,
         return xs, pe_all[:starts], jnp.max(pe_all[starts:].reshape(seg.shape[:3]), axis=-1)
 
     # optimised, though it runs once: compiled without LLVM's passes (inference.programs),
-    # JKR's search took 2.5 s less cold but 1.5-1.7 s more for every law when the
-    # compilation cache is warm (its 16 x 200 Adam steps run slower), which the warm
-    # comparison's margin could not pay
+    # its Adam steps run slower, which costs more than the compile saves once the
+    # compilation cache is warm
     xs, pe, ridge = (np.asarray(a) for a in run(jax.random.PRNGKey(seed)))
     unravel = layout[-1]
     ok = np.isfinite(pe)

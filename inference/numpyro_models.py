@@ -60,8 +60,8 @@ factor), the curve is tabulated once along that parameter before sampling and ea
 reads one cell of it (:mod:`inference.fold`: the exact curve to 1e-7 where it is used,
 checked where it is built; elsewhere the exact curve). Where the f0 -> delta0 map and its
 Jacobian depend on the same one parameter (all four), they are folded with the curve
-(:mod:`inference.steps`). The likelihood is unchanged to that tolerance; one NUTS step of
-these laws costs 9-11 us on one core against Hertz's 7 (24-34 us without the fold).
+(:mod:`inference.steps`). The likelihood is unchanged to that tolerance, and a step reads
+one cell per sweep point instead of the law's tables.
 Where the curve depends on two parameters (Maugis-Dugdale: gamma and lambda) and the
 sweeps' likelihood is Normal, that likelihood is folded instead: it reads the curve
 through two residual sums, tabulated in the two parameters over the region the data leave
@@ -139,7 +139,7 @@ class ModelSpec:
     """What to build: a registered law (or the baseline) at a rung.
 
     ``eta_mode='split'`` with ``law='viscoelastic'`` is the law ``viscoelastic_split``
-    (kept as a spelling of it). ``f0_sd`` [Hz] is the measurement noise of f0 that the
+    (another spelling of it). ``f0_sd`` [Hz] is the measurement noise of f0 that the
     exact conditioning on f0 neglects (documented, not used by the likelihood);
     ``use_f0=False`` conditions on the measured f0 without its density (evidences are
     then not comparable). ``fold=False`` evaluates the law's sweep curve directly at every

@@ -26,10 +26,9 @@ latent site to Uniform(0, 1) through it), and all are proper (evidence needs tha
   pivot xs_ref sits among the largest sweeps (inference.baseline.reference_scale), which
   approach contact loss: first-order Hertz softens by 0.05 at x = 1, so a_ref is a few
   per cent, known to a factor ~4.5 either way (95 % in [1e-3, 0.38]). Prior predictive
-  medians of |Delta f/f0| on hertz_dynamics (1.3e-4, 0.02, 0.032 at the smallest, pivot
-  and largest amplitude) are those of the former amp ~ HalfNormal(0.2) at xs = 1 (1.2e-4,
-  0.022, 0.036); on paper_like the former put 0.33 at the largest amplitude, 2.5 times the
-  largest shift measured, where this prior puts 0.035.
+  medians of |Delta f/f0| on hertz_dynamics: 1.3e-4, 0.02, 0.032 at the smallest, pivot
+  and largest amplitude; on paper_like 0.035 at the largest amplitude, below the largest
+  shift measured (~0.13).
 - baseline ``mu_f0`` ~ Normal(2700, 300) Hz, ``tau_f0`` ~ HalfNormal(200) Hz: the bead
   resonance on steel is 2.6-2.9 kHz across laws.
 """

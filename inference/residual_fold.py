@@ -162,8 +162,8 @@ def build_residual_fold(exact: Callable[[dict], jnp.ndarray], theta: dict,
     w = (hi - lo) / CELLS
     # the nodes' values, with two more on each side for the derivatives: fourth-order
     # central differences (d/dz_a, d/dz_b, then d/dz_a of d/dz_b); the nodes' exact
-    # derivatives (nested forward derivatives of the curve) compiled in 5 s against the
-    # values' 1.8 for Maugis-Dugdale, whose 10^4 points then cost 0.5 s against 0.15
+    # derivatives (nested forward derivatives of the curve) compile and run several
+    # times slower than the values
     pad = np.arange(-2, CELLS + 3)
     ga, gb = lo[0] + w[0] * pad, lo[1] + w[1] * pad
     zz = np.stack(np.meshgrid(ga, gb, indexing="ij"), -1).reshape(-1, 2)
@@ -230,7 +230,7 @@ def _run(prog: Callable, z: np.ndarray) -> list[np.ndarray]:
 
 def _program(fn: Callable) -> Callable:
     # fn over a batch of points, one after another: vmapped, a tabulated law reads a
-    # table patch per point (Maugis-Dugdale's curve: 3-4x slower than in sequence)
+    # table patch per point, slower than in sequence
     return jax.jit(lambda zz: jax.lax.map(fn, zz))
 
 

@@ -170,10 +170,10 @@ def draw_program(model: Callable, data: dict[str, Any], *, init_params: dict | N
     returns its wall time [s]. :func:`draw_cost` times it; a benchmark that compares laws
     times theirs in turns (machines here drift by tens of percent within minutes).
 
-    Why not the NUTS run's wall time: it holds the compilation, whose noise (tenths of a
-    second) can exceed a fast law's whole sampling. Why not a gradient timed call by call
-    from Python: NUTS takes its leapfrog steps inside one XLA program, so a per-call
-    dispatch (~30 us on a 2-core CPU with 4 host devices) is not part of their cost, while
+    Why not the NUTS run's wall time: it holds the compilation, whose noise can exceed a
+    fast law's whole sampling. Why not a gradient timed call by call from Python: NUTS
+    takes its leapfrog steps inside one XLA program, so a per-call dispatch is not part of
+    their cost, while
     the sampler's own work per step (tree building, the mass matrix) is, and both are
     what this loop times. The chain runs on one thread; ``init_params`` (unconstrained)
     as :func:`run_nuts` takes them.

@@ -10,7 +10,7 @@ observed sweep. :class:`SweepCurve` defines them once, for the model and for the
 The fold (:func:`step_fold`): for JKR and DMT (gamma), the power law (n) and the rough
 sphere (its roughness factor) all of these depend on one parameter. Folding the overlap
 map with the curve matters for the adhesive laws: their f0 -> delta0 map (the implied E*,
-then the contact radius of the JKR or DMT state) cost as much per step as the folded curve.
+then the contact radius of the JKR or DMT state) costs as much per step as the folded curve.
 Where the overlap map depends on more parameters than the curve (a user's law), the curve
 alone is folded and the map evaluated exactly; where the curve does not depend on exactly
 one parameter, the curve is not folded; where it depends on two and the sweeps'

@@ -272,7 +272,7 @@ def _sums(y, pars, dpars=None):
     together in every expansion) also returns Sum j T_j and Sum j V_j (Y d/dY of the
     sums) and dS1/dm, dS2/dm by dual numbers written out (one reciprocal per step).
     A rolled loop on purpose: fully unrolled, XLA (CPU) duplicates the whole chain
-    into every consumer of the sums, up to ~100x slower in the gradient.
+    into every consumer of the sums, which makes the gradient far slower.
     """
     a1, b1, n1, e, flag, t, v = pars
     e2 = e * e

@@ -8,8 +8,8 @@ parameter and at overlaps 0.6 and 1.6 times the static one), the law is shape-in
 (every pure power of delta is: a Hertz written from scratch is), its backbone is one
 curve S(x), and :func:`attach_fast_backbone` tabulates it once with the tool of the
 built-in tables (:mod:`models.surrogate`, constant in its shape coordinate). Otherwise
-the law keeps the generic quadrature: exact, but tens of milliseconds per sweep, which
-makes NUTS slow; the law's description says so.
+the law keeps the generic quadrature: exact, but slow in NUTS; the law's description says
+so.
 """
 
 from __future__ import annotations

@@ -16,13 +16,13 @@ contact arc q in [-1, qmax] uses q = -1 + (qmax + 1) cos^2(phi) and the flight a
 is a parabola, integrated in closed form for the period and by Gauss-Legendre for
 the Fourier integral. Just past contact-loss onset the speed at q = -1 is small and the
 contact arc's integrand has complex singularities close to phi = pi/2: that arc uses a
-composite rule graded towards pi/2, fixed whatever ``nodes`` (one 48-node rule there was
-off by up to 1e-4 in the period, and the amplitude root solve near x_c by 1e-5; now about
-1e-12 against an mpmath energy integral, tests/test_backbone.py). ``nodes`` sets the
+composite rule graded towards pi/2, fixed whatever ``nodes``: about 1e-12 against an
+mpmath energy integral (tests/test_backbone.py), where one 48-node rule would be off by
+up to 1e-4 in the period and the amplitude root solve near x_c by 1e-5. ``nodes`` sets the
 contact-only orbit's rule (48 are within ~1e-12 up to the onset) and the flight
 parabola's. The energy gaps next to the turning points are formed without subtracting
-nearly equal q (2h sin^2, 2h cos^2): with 256 nodes the nested nodes rounded onto qmax
-and the gap to 0 (NaN).
+nearly equal q (2h sin^2, 2h cos^2): subtracting, with 256 nodes the nested nodes would
+round onto qmax and the gap to 0 (NaN).
 
 Amplitude (the project convention, what a vibrometer reads): x = first-harmonic amplitude of q,
 a1 = (4/T) int_0^(T/2) q(tau) cos(omega tau) dtau (the orbit is even about qmax), so
@@ -155,9 +155,9 @@ def _flight_arc(divided, qmax, qc, accel, nodes):
     Just past contact-loss onset the speed v at qc is small and dtau/dphi =
     2 span cos(phi) sin(phi)/sqrt(v^2 + (2 span/n) cos^2(phi) + ...) has complex
     singularities at a distance ~ v (n/(2 span))^(1/2) from phi = pi/2: the rule is graded
-    towards pi/2 (:func:`_graded`; one Gauss rule on [0, pi/2] lost up to 1e-4 there), and
+    towards pi/2 (:func:`_graded`; one Gauss rule on [0, pi/2] loses up to 1e-4 there), and
     tau at the nodes is the sum of the panels before plus the spectral partial integral in
-    the node's own panel. ``nodes`` is kept for the signature: the graded rule is fixed.
+    the node's own panel. ``nodes`` does not apply: the graded rule is fixed.
     """
     del nodes
     ph, w, width = _graded(0.0, np.pi / 2)

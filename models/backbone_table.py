@@ -27,10 +27,9 @@ with a degree-23 Chebyshev interpolant in n on the 24 Chebyshev-Gauss nodes of [
 the same nodes (error 7e-14). The contact spline is not-a-knot; the flight spline is
 clamped at v = 0 to the contact spline's slope there, so the surrogate is C1 across
 x_c like the exact backbone (C2 elsewhere). Samples: the exact backbone with 48 Gauss
-nodes, but 128 within 0.05 of x_c (:func:`exact_shift`; kept from before the exact
-backbone's graded rule next to contact loss made 48 nodes accurate there too, see
-models.backbone), and the exact orbit at
-qmax_c (1 - 1e-12) for the kink values; Q(0, n) is the Lindstedt coefficient.
+nodes, but 128 within 0.05 of x_c (:func:`exact_shift`, so that the stored table is
+regenerated bit for bit), and the exact orbit at qmax_c (1 - 1e-12) for the kink values;
+Q(0, n) is the Lindstedt coefficient.
 Table: 64 x 24 samples per region, 0.13 MB.
 
 Measured (``python -m pytest -m slow tests/test_backbone_table.py``, 2000 random points
@@ -43,8 +42,8 @@ exact backbone (60 random points away from x_c): |d/dx error| <= 1.7e-7, |d/dn e
 <= 1.5e-8 (relative <= 4e-6).
 
 Outside the domain (x < 0, x > X_MAX, n outside [1 - 1e-9, 3 + 1e-9]) the result is NaN,
-never an extrapolation. Regenerate the table (deterministic, bit-identical; 35-60 s on
-2 shared CPU cores, mostly the exact backbone)::
+never an extrapolation. Regenerate the table (deterministic, bit-identical; most of the
+time goes to the exact backbone)::
 
     python -m models.backbone_table --rebuild
 """
@@ -135,7 +134,7 @@ def load_table() -> dict[str, np.ndarray]:
     if _TABLE is None:
         with np.load(TABLE_PATH) as f:
             _TABLE = {k: f[k] for k in f.files}
-        _TABLE.setdefault("p_range", np.asarray([N_MIN, N_MAX]))  # tables built before it
+        _TABLE.setdefault("p_range", np.asarray([N_MIN, N_MAX]))  # the stored file has none
     return _TABLE
 
 
@@ -158,7 +157,7 @@ def backbone_shift_fast(x: ArrayLike, n: ArrayLike = 1.5) -> jnp.ndarray:
     worst, at the kink for n -> 1; ~1e-8 elsewhere), relative error at small x < 1e-6
     for x <= 1e-3. Differentiable in x and n: C2 in x except at the contact-loss
     amplitude x_c(n) (:func:`contact_loss_amplitude`), where it is C1, like the exact
-    backbone. About 0.2 us per point (value and gradient) vmapped, compile < 1 s.
+    backbone.
     """
     tab = load_table()
     x, n = jnp.asarray(x, dtype=float), jnp.asarray(n, dtype=float)

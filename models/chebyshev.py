@@ -6,8 +6,8 @@ evaluate it, and the second is imported by the first.
 
 Why from the powers of nu and not the three-term recurrence: for one scalar nu (the
 sampler's case) the recurrence is ~2m scalar XLA operations, each a separate kernel on
-the CPU, and its reverse-mode pass as many again (~8 us of a table lookup's 15 for 672
-points); the powers are one vector operation and their derivative a second. Why not
+the CPU, and its reverse-mode pass as many again (most of a table lookup's cost); the
+powers are one vector operation and their derivative a second. Why not
 cos(k arccos nu): its derivative is singular at nu = +-1, where a clamped shape parameter
 sits. Rounding: the monomial coefficients of T_k grow like (1 + sqrt 2)^k, so T_k(nu)
 carries an absolute error ~1e-16 (1 + sqrt 2)^k (2e-11 at k = 15, 2e-8 at k = 23,

@@ -24,8 +24,8 @@ Given a :class:`models.law.ContactLaw` (force F(delta) [N], keyword parameters):
   frequency change). The mean restoring force (P(b) - P(a))/(b - a) is the tanh-sinh
   integral of P' over [a, b]: no difference of nearly equal potentials.
 
-These are exact references, tens of milliseconds per point: laws use closed forms and
-tables as fast paths (:mod:`models.surrogate`), and the tests compare both.
+These are exact references, too slow for a sampler: laws use closed forms and tables
+as fast paths (:mod:`models.surrogate`), and the tests compare both.
 """
 
 from __future__ import annotations

@@ -30,8 +30,8 @@ Rungs (Delta f/f0 [-] at first-harmonic amplitude x):
 * :func:`timeint_shift`: the stepped down-sweep integrated in time (RK4) around that peak
   (:func:`models.ladder.timeint_peak`), moved to x along the law's backbone slope.
 
-The forced rungs are Python loops over x with convergence checks (tens of milliseconds
-to seconds per point, after a compile per law): references, not sampler paths. A solve
+The forced rungs are Python loops over x with convergence checks (slow, and compiled
+per law): references, not sampler paths. A solve
 that does not converge raises RuntimeError naming x; no NaN is returned.
 """
 
@@ -160,7 +160,7 @@ def _backbone(law: Any, x: np.ndarray, d0: float, kw: dict[str, Any],
               cons: ForceLaw) -> np.ndarray:
     """Backbone Delta f/f0 at x: the law's fast path where it has one, else the HBM
     backbone (H = 7) of the conservative oscillator (the generic energy-integral
-    quadrature compiles for about a minute; these are starting guesses and slopes)."""
+    quadrature is slow to compile; these are starting guesses and slopes)."""
     x = np.asarray(x, float)
     if "backbone" in law.shifts:
         return np.asarray(law.shift(x, rung="backbone", delta0=d0, **kw), float)
@@ -193,8 +193,8 @@ def hbm_shift(law: Any, x: Any, *, delta0: Any, q_factor: float | None = None,
               harmonics: int = 3, **kw: Any) -> np.ndarray:
     """Rung 'harmonic_balance': Omega_peak - 1 of the forced response whose resonance peak
     has first-harmonic amplitude x, H = ``harmonics`` (default 3, as models.ladder: H = 7
-    is closer to time integration, by ~1e-4 at x = 0.8, but a solve costs ~50 times more
-    and converges less often past contact loss) (module doc). x = 0 is solved at
+    is closer to time integration, by ~1e-4 at x = 0.8, but a solve costs far more and
+    converges less often past contact loss) (module doc). x = 0 is solved at
     x = 1e-6: the linear peak, Omega = (1 - 2 zeta^2)^(-1/2), about 1/(4 Q^2) above 1."""
     kw = {k: v for k, v in kw.items() if k not in _OPTIONS}
     xs, d0 = _points(x, delta0)

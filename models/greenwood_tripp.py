@@ -155,7 +155,7 @@ def ring_grid(approach: float, n_rings: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _linear_solve(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     # GMRES with a Jacobi preconditioner (12-60 iterations) instead of LAPACK: a dense
-    # multithreaded factorisation runs ~100x slower on a loaded 2-core machine
+    # multithreaded factorisation is far slower on a loaded machine with few cores
     inv_diag = 1.0 / np.diag(jac)
     prec = LinearOperator(jac.shape, matvec=lambda x: inv_diag * x)
     x, info = gmres(jac, rhs, rtol=1e-13, atol=0.0, restart=min(200, rhs.size),

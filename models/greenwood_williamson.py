@@ -50,7 +50,7 @@ the contact edge (exactly 0), and sigma -> 0 (sigma = 0 is Hertz exactly).
 Backbone rung: the exact backbone tabulated in (x, ln D0'), D0' = delta0'/sigma the overlap
 counted from the contact edge (:mod:`models.shape_tables`), within 3e-5 in Delta f/f0.
 
-Regenerate (deterministic, ~3 min on 2 shared cores)::
+Regenerate (deterministic; a few minutes)::
 
     python -m models.greenwood_williamson --rebuild
 """

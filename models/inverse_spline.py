@@ -4,8 +4,8 @@ tabulated spline of it (the fast path for samplers).
 Why a table. A NumPyro likelihood that inverts a law's load-approach curve for every
 protocol (the static overlap under the load, the overlap a measured f0 implies) pays for
 a Newton loop on each gradient evaluation: on the CPU an XLA while loop costs about as much
-as the rest of the likelihood (the rough sphere's f0 inversion was 2/3 of its gradient's
-cost). The inverse of a fixed curve is itself a fixed curve, so it is tabulated once, when
+as the rest of the likelihood. The inverse of a fixed curve is itself a fixed curve, so it
+is tabulated once, when
 the law's forward table is built, and read like any other spline: one cell lookup and a
 Horner sum, with derivatives by autodiff of the spline.
 

@@ -1,8 +1,8 @@
 """The JKR contact law (paper Sec. 4.3, Eqs. 16-19): :data:`LAW`, with its fast rungs.
 
 The mechanics (closed forms in the contact radius, the root solve delta -> a, the
-first-order quadrature) is :mod:`models.jkr_contact`, re-exported here, so
-``models.jkr.force`` and the rest keep their names. The law's first-order rung is the
+first-order quadrature) is :mod:`models.jkr_contact`, re-exported here, so the law's
+functions are reached through this module. The law's first-order rung is the
 table of :mod:`models.jkr_table` (built from that quadrature), its backbone rung the
 table of :mod:`models.shape_backbone`; neither table module imports this one.
 """
@@ -99,7 +99,7 @@ def _law():
         domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw),
                                                       decay=HERTZ_DECAY)},
         # relative fit time (models.law.ContactLaw.cost): the implicit contact-radius
-        # solve and the two-parameter backbone table made it the slowest on the embedded data
+        # solve and the two-parameter backbone table make its fits among the slowest
         cost=4.0,
     )
 

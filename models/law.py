@@ -298,7 +298,7 @@ class ContactLaw:
 
     def too_slow_for_nuts(self, rung: str) -> bool:
         """True where a built-in law has ``rung`` only as the generic quadrature (no closed
-        form or table): that quadrature at every likelihood call costs hours in NUTS. A law
+        form or table): that quadrature at every likelihood call is too slow for NUTS. A law
         file's law is never so marked: its file asked for the rung."""
         return rung in self.rungs and rung not in self.shifts and self.source == "built-in"
 

@@ -84,8 +84,7 @@ def _law():
                 domain=static.LAM_RANGE, what="the Maugis transition parameter")
 
     # the static state (r, ln n, ln D, Pbar_c) is read by the overlap maps, the reference
-    # overlap, the backbone and its domain: computed once per resolve, not by each (one
-    # core, the NUTS step on the embedded data: 57 -> 48 us)
+    # overlap, the backbone and its domain: computed once per resolve, not by each
     state = Prepared("maugis_dugdale_state", ("load", "radius", "gamma", "lam"),
                      lambda *, load, radius, gamma, lam, **_: static.contact_state(
                          load, radius=radius, gamma=gamma, lam=lam))
@@ -126,19 +125,16 @@ def _law():
         # them the law tends to Hertz's as 1/r (HERTZ_DECAY)
         domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                       kw["lam"], decay=HERTZ_DECAY)},
-        # a cold fit's relative wall time (61 s in the default comparison against Hertz's
-        # 21): started first. Its curve depends on two parameters, so inference.fold does
-        # not fold it; its sweeps' likelihood is folded instead (inference.residual_fold,
-        # built in the mode search): a NUTS step 22.6 us against Hertz's 9.6, one core,
-        # 36.3 unfolded; ESS/s 0.45-0.67 of Hertz's sampling alone (README)
+        # relative fit time (models.law.ContactLaw.cost): the costliest law, started
+        # first. Its curve depends on two parameters, so inference.fold does not fold it;
+        # its sweeps' likelihood is folded instead (inference.residual_fold, built in the
+        # mode search)
         cost=5.0,
         # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
         # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2 (JKR-like),
-        # so gamma's posterior follows a curved ridge over ln lam (0.58-0.75 J/m^2 on data
-        # simulated at lam = 1), which NUTS crossed in 28-55 leapfrog steps a draw, one
-        # chain in four not at all (R-hat 1.05, bulk ESS 160 of 4000). Sampled as
-        # gamma |Pbar_c(lam)| the ridge is straight: 11-14 steps, R-hat 1.002, bulk ESS
-        # 1614 (tests/test_recovery.py)
+        # so gamma's posterior follows a curved ridge over ln lam, which NUTS crosses
+        # slowly (on data simulated at lam = 1, one chain in four not at all). Sampled as
+        # gamma |Pbar_c(lam)| the ridge is straight (tests/test_recovery.py)
         sampler_scales={"gamma": lambda *, lam, **_: -static.pull_off(lam)},
         prepared=(state,),
     )

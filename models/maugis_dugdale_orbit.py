@@ -3,9 +3,9 @@
 Why. The Maugis-Dugdale force is implicit: F(delta) needs a root solve for Maugis' angle
 theta = arcsec(c/a) at every delta (:mod:`models.maugis_dugdale`). The generic exact
 backbone (:mod:`models.generic`) averages the restoring force over thousands of intervals
-per orbit, each by a 97-node quadrature of F, so one backbone point took ~9 s (compiled)
-with a 60-step root solve per force. Here the mean restoring force over an interval is an
-integral along the branch in theta, where the state is explicit:
+per orbit, each by a 97-node quadrature of F, with a root solve at every node. Here the
+mean restoring force over an interval is an integral along the branch in theta, where the
+state is explicit:
 
     <Pbar>_[Delta_a, Delta_b] = Int Pbar(theta) Delta'(theta) dtheta / Int Delta'(theta) dtheta
 

@@ -4,9 +4,9 @@ Why. At a load F0 > 0 the reduced state of a Maugis-Dugdale contact (module
 :mod:`models.maugis_dugdale`) follows from two numbers, the load ratio r = F0/Fc (Fc =
 -Pbar_c(lam) pi w R, the load-controlled pull-off force) and Maugis' lam: theta0 =
 theta(Pbar0, lam) with Pbar0 = F0/(pi w R) = -r Pbar_c(lam). The exact maps need two
-bracketed root solves (pull-off angle, then the load's angle; 120 Newton steps), hundreds
-of microseconds inside a sampler's step, and their compiled programs (with derivatives)
-took 4 s each to build: a sampler's log density calls the maps at ten sites. Tabulated
+bracketed root solves (pull-off angle, then the load's angle; 120 Newton steps), slow in
+a sampler's step and slow to compile with their derivatives, and a sampler's log density
+calls the maps at ten sites. Tabulated
 here, as Chebyshev interpolants, on the whole load range r in (0, inf) for every lam of
 the law's parameter range :data:`LAM_RANGE` (its prior's support):
 

@@ -6,15 +6,15 @@ tensor product with a Chebyshev interpolant in p of up to 24 terms. Where p is o
 for all sweep points (Hertz, the power law) the Chebyshev sums are taken once per knot. A
 law whose p differs per protocol (the rough sphere's D0' = delta0'/sigma) needs them per
 point: each point then gathers 4 x 24 coefficients for its cell and sums them, which on
-the CPU is memory traffic (454 points x 96 coefficients, 350 kB per evaluation) and was
-most of the rough sphere's likelihood cost. On cells in p, a point gathers 4 x 4.
+the CPU is memory traffic (454 points x 96 coefficients, 350 kB per evaluation) and most
+of the likelihood's cost. On cells in p, a point gathers 4 x 4.
 
 Construction (deterministic, from the stored table, on first use). Each piece
 [p_k, p_k+1] of the table is cut into ``p_cells[k]`` equal cells; on each cell every
 spline coefficient and x_c(p) are the cubic Hermite interpolants of the Chebyshev
 interpolant's values and p-derivatives at the cell ends (exact derivatives of the
 Chebyshev series). The result is C1 in p inside a piece, continuous to the table's error at
-a break, as before. Its error against the Chebyshev interpolant is at most
+a break, as the interpolant is. Its error against the Chebyshev interpolant is at most
 h^4/384 max|d^4 S/dp^4| per cell of width h; the tests measure it (the rough sphere:
 below 1e-6 in Delta f/f0, against the table's stated 3e-5).
 """
@@ -159,7 +159,7 @@ def amplitude_cell(table: dict[str, np.ndarray], xs: jnp.ndarray,
 
     The knots are located from their grading's closed form (:func:`contact_knot`,
     :func:`flight_knot`, checked against the stored knots), not read from the knot arrays
-    (:func:`models._math.graded_cell`: ~6.6 -> 2.6 us for 672 points)."""
+    (:func:`models._math.graded_cell`: a gather from a knot array costs more)."""
     x_max = float(table["x_max"])
     uk, vk = np.asarray(table["u_knots"]), np.asarray(table["v_knots"])
     _check_grading(uk, contact_knot, "u knots")
@@ -199,11 +199,11 @@ def value_and_tangent(inside, xs, d, xc, dxc, c, dc, pre, x_max, txs, tp, tpre):
     A table with two shape coordinates passes ``dxc``, ``dc`` and ``tp`` as tuples, one
     entry each (F_p for each, each times its tangent). Written out because autodiff of
     the lookup re-derives the cell search inside several reductions (and, at one p for
-    all points, scatters into the knot array): on the CPU that cost two to three times
+    all points, scatters into the knot array): on the CPU that costs two to three times
     the value (:mod:`models.scalar_shape`). Why the partials are formed from the primal
     coefficients and only then multiplied by the tangents: the reverse pass is then one
     product and sum per coordinate (a per-point coefficient tangent, dc times tp formed
-    first, made it 2.5x costlier: models.pq_patches).
+    first, costs more: models.pq_patches).
     """
     y, y_d = cubic(c, d), cubic_slope(c, d)
     span = x_max - xc

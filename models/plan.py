@@ -60,7 +60,7 @@ _N_FFT = 1024
 
 def _law_functions(law: str):
     """Static overlap, stiffness and force of the law; Maugis-Dugdale uses JKR (bracketed
-    by DMT in the adhesion effect: no Maugis-Dugdale implementation exists)."""
+    by DMT in the adhesion effect: the plan has no Maugis-Dugdale force of its own)."""
     if law == "Hertz":
         return hertz, {}
     return (dmt if law == "DMT" else jkr), {"gamma": None}

@@ -4,10 +4,10 @@ local Chebyshev patches resampled from its global interpolant.
 Why. A table with a second shape coordinate (:mod:`models.surrogate`; Maugis-Dugdale's, in
 the load ratio p = ln F0/Fc and q = ln lambda) is a tensor product of m Chebyshev terms in p
 and m_q in q for every spline cell's 4 coefficients and for x_c: 16 x 20 x 377 numbers,
-0.96 MB. Read at the sampler's one (p, q), every step contracted all of them, value and
-both slopes (one core: 108 us a step with its gradient, the value alone 24; XLA's CPU dot
-with two right-hand columns ran 5x slower than two matrix-vector products). On patches, a
-step reads one: ``DEGREE + 1`` terms in each coordinate, 25 x 377 numbers.
+0.96 MB. Read at the sampler's one (p, q), every step would contract all of them, value
+and both slopes (and XLA's CPU dot with two right-hand columns is slower than two
+matrix-vector products). On patches, a step reads one: ``DEGREE + 1`` terms in each
+coordinate, 25 x 377 numbers.
 
 Construction (deterministic, from the stored table, on first use, kept in the loaded
 table): the table's p range is cut into ``P_PATCHES`` equal intervals of its Chebyshev
@@ -28,8 +28,8 @@ values: below :data:`ERROR`, against the table's own stated 1e-5.
 Derivatives by hand (``custom_jvp``), as :mod:`models.scalar_shape`: the patch's three
 contractions (value, d/dnu, d/dnu_q) are one product of three basis rows with the patch's
 coefficients, and the per-point tangent is :func:`models.p_cells.value_and_tangent`'s,
-with a partial derivative per shape coordinate formed before the tangents enter (one
-core, 672 points, lookup with gradient: 34.8 -> 19.3 us; the value alone 11.7).
+with a partial derivative per shape coordinate formed before the tangents enter (a
+per-point coefficient tangent would cost more in the reverse pass).
 """
 
 from __future__ import annotations
@@ -111,8 +111,8 @@ def evaluate(table: dict[str, np.ndarray], xs: jnp.ndarray, nu: jnp.ndarray,
         ta, da = chebyshev.basis_and_slope(a, n)
         tb, db = chebyshev.basis_and_slope(b, n)
         # d a/d nu = P_PATCHES, d b/d nu_q = Q_PATCHES; the three rows in one product
-        # with the patch stored (n*n, K+1): 6.3 us against 8.0 for three products with
-        # it stored (K+1, n*n) (one core, the slice's copy included)
+        # with the patch stored (n*n, K+1): cheaper than three products with it stored
+        # (K+1, n*n), the slice's copy included
         rows = jnp.stack([jnp.outer(ta, tb).ravel(), P_PATCHES * jnp.outer(da, tb).ravel(),
                           Q_PATCHES * jnp.outer(ta, db).ravel()])
         return tuple(rows @ c)

@@ -9,8 +9,8 @@ cell's 4 and evaluates a cubic.
 
 Why the derivatives are written out (a ``custom_jvp``): reverse-mode autodiff of that
 lookup transposes the per-point gather into a scatter-add over the knot array and
-re-derives the cell search inside several reductions; on the CPU that cost two to three
-times the value (measured for 672 points: value 4.5 us, gradient 16 us). By hand, with
+re-derives the cell search inside several reductions; on the CPU that costs two to three
+times the value. By hand, with
 the coefficients' p-derivatives gathered beside them (8 numbers per point), the tangent is
 S_x dx + S_nu dnu: elementwise in x, a sum over points in the scalar nu.
 

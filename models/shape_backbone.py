@@ -91,8 +91,8 @@ def backbone_fast(name: str, x: ArrayLike, s: ArrayLike,
         return hertz + (v - hertz) * jnp.exp(-decay * over)
 
     # Hertz's table only where some s lies past the end: read at every sweep point of
-    # every step it cost a sampler as much as the law's own table (Maugis-Dugdale's
-    # value + gradient, one core: 33.2 -> 46.8 us); under vmap both branches run
+    # every step it would cost a sampler as much as the law's own table; under vmap
+    # both branches run
     return jax.lax.cond(jnp.any(over > 0.0), carried, lambda v: v, value)
 
 

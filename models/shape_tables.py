@@ -25,8 +25,7 @@ snap-off hysteresis is a loss, not a stiffness). Errors against the generic exac
 (tests/test_shape_tables.py): JKR and DMT within 1e-5 in Delta f/f0 (measured 7e-6),
 except in the 0.01 of x just past the contact-loss corner x_c, where the adhesive laws'
 backbone turns by up to 30x in slope (:mod:`models.surrogate`, ``kink_c1``): there within
-1e-4 (measured 5e-5, near F0/Fc = 20, where the turn is sharpest against the knots). The
-tables built before the corner was known (clamped C1 at x_c) erred by up to 2.5e-2 there.
+1e-4 (measured 5e-5, near F0/Fc = 20, where the turn is sharpest against the knots).
 
 Maugis-Dugdale: two shape coordinates, p = ln(F0/Fc) with Fc its pull-off force, and
 q = ln lam in [ln 0.1, ln 100] (20 Chebyshev nodes in q; models.surrogate). Stated error
@@ -36,20 +35,18 @@ offsets from x_c: at most 1.7e-6 away from the corner (2e-8 below x = 0.8), 4.8e
 1e-3 past it (F0/Fc = 20); the same at every lam.
 
 Greenwood-Williamson: three pieces in p (D0' in [1.5, 4], [4, 16], [16, 1e4]; 16, 24
-and 16 Chebyshev nodes), stated error 3e-5 in Delta f/f0 (tested). Measured on 100 D0' x
+and 16 Chebyshev nodes), because one interpolant over the whole range cannot follow the
+knee at D0 = D0' - 6 ~ -1; stated error 3e-5 in Delta f/f0 (tested). Measured on 100 D0' x
 4 amplitudes (0.3, 0.8, 0.95, 1.5) against the 48-node exact backbone: at most 1.1e-5, at
 x = 0.8 near D0' = 40, where the corner of Hertz contact loss (smoothed over sigma, at
 q = -1 + 6/D0') crosses the contact arc as p changes; <= 1.5e-7 in the two lower pieces
-and at the other amplitudes. The table it replaced erred by up to 0.057: its contact-loss
-point (models.generic.contact_loss_onset) took the wrong branch at every other node, and
-one interpolant over the whole range could not follow the knee at D0 = D0' - 6 ~ -1.
+and at the other amplitudes.
 
 This module builds the tables from the laws (it imports them); the laws' backbone rungs
 read them through :mod:`models.shape_backbone` (:func:`backbone_fast`, :func:`load_table`,
 re-exported here), which imports no law: the dependency runs one way.
 
-Regenerate (deterministic; minutes per law on 2 cores, 44 min for the Greenwood-Williamson
-table on 2 shared cores, about 40 min for Maugis-Dugdale's)::
+Regenerate (deterministic; tens of minutes per law)::
 
     python -m models.shape_tables --rebuild [--law jkr|dmt|greenwood_williamson|maugis_dugdale]
 """
@@ -143,7 +140,7 @@ TABLES: dict[str, ShapeTable] = {
         "roughness)",
         # D0 = D0' - 6 ~ -1 (D0' 4-16): the load passes from the summits' Gaussian tail to
         # the Hertz-like bulk and the backbone turns within ~0.3 in p; one 32-node
-        # interpolant over the whole range converged algebraically (x_c to 3e-4), one per
+        # interpolant over the whole range converges algebraically (x_c to 3e-4), one per
         # piece spectrally (x_c to 1e-7)
         p_breaks=(float(np.log(4.0)), float(np.log(16.0))), m_pieces=(16, 24, 16),
         # its D0' differs per protocol in a fit: evaluated on Hermite cells in p (cell

@@ -1,4 +1,4 @@
-"""Simulate a scene with only the effects its plan includes (issue 3, "Scenes").
+"""Simulate a scene with only the effects its plan includes.
 
 :func:`build_simulator` reads a :class:`~models.plan.Plan` and builds a :class:`Simulator`
 of the bead on the rod end with exactly the included effects (``include``/``exclude``

@@ -2,7 +2,7 @@
 
 A law whose dimensionless backbone Delta f/f0 = S(x; p) depends on one shape parameter p
 (the power law's n; the JKR and DMT load ratio F0/Fc, as log F0/Fc) gets a table built
-here from its exact backbone, fast enough for NUTS (about 0.2 us per point with gradient).
+here from its exact backbone, fast enough for NUTS.
 The power-law table of :mod:`models.backbone_table` and the tables of
 :mod:`models.shape_tables` (JKR, DMT, Greenwood-Williamson) are built and evaluated by this
 one tool.
@@ -24,7 +24,7 @@ not C1: just past the onset both x and S move like sqrt(q_max - q_c) of the orbi
 point, and S(x) leaves with a slope of its own (JKR at F0/Fc = 0.6: dS/dx -0.09 in contact,
 -2.7 in flight, measured with models.generic.backbone_shift). S(x) is smooth on each side,
 so the flight spline then starts not-a-knot instead of clamped: clamping it to the contact
-slope erred by up to 2.5e-2 in Delta f/f0 within 0.02 of x_c.
+slope would err by up to 2.5e-2 in Delta f/f0 within 0.02 of x_c.
 
 Pieces in p. A law whose backbone varies steeply in one stretch of its p range (the
 Greenwood-Williamson sphere where the load passes from the summits' Gaussian tail to the
@@ -63,7 +63,7 @@ __all__ = ["X_MAX", "BackboneSpec", "build", "evaluate", "within_amplitude", "ch
            "chebyshev_basis", "kink_amplitude", "to_chebyshev", "spline_coefficients"]
 
 chebyshev_basis = chebyshev.basis
-"""T_0..T_{m-1}(nu) (:func:`models.chebyshev.basis`; kept under this name)."""
+"""T_0..T_{m-1}(nu) (:func:`models.chebyshev.basis`)."""
 to_chebyshev = chebyshev.to_chebyshev
 """Values on Chebyshev-Gauss nodes -> coefficients (:func:`models.chebyshev.to_chebyshev`)."""
 
@@ -235,7 +235,7 @@ def _piece(table, p):
         return None, (2.0 * p - (p_lo + p_hi)) / (p_hi - p_lo), table["xc_cheb"]
     edges = jnp.asarray(table["p_edges"])
     # a count of the breaks at or below p, not searchsorted: a handful of breaks, and
-    # searchsorted's scan is an XLA while loop (~5 us a call for 454 points on the CPU)
+    # searchsorted's scan is an XLA while loop, slow on the CPU
     k = sum((p >= b).astype(jnp.int32) for b in np.asarray(table["p_edges"])[1:-1])
     lo, hi = edges[k], edges[k + 1]
     return k, (2.0 * p - (lo + hi)) / (hi - lo), jnp.asarray(table["xc_cheb"])[k]
@@ -314,8 +314,7 @@ def evaluate(table: dict[str, np.ndarray], x: jnp.ndarray, p: jnp.ndarray, *,
     basis = chebyshev.basis(nu, jnp.shape(xc_cheb)[-1])
     xc = jnp.sum(basis * jnp.asarray(xc_cheb), axis=-1)
     # one gather from the contact and flight cells side by side, not one per region: on
-    # the CPU the per-point gathers are most of a table's cost (a law whose shape
-    # parameter differs per protocol: 110 -> 75 us for 454 points, value and gradient)
+    # the CPU the per-point gathers are most of a table's cost
     inside, i, d = p_cells.amplitude_cell(table, xs, xc)
     y = _cell_eval(p_cells.both_regions(table), i, d, basis, piece)
     return jnp.where(inside, pre * xs**2 * y, y)

@@ -189,8 +189,10 @@ def test_html_is_self_contained_and_embeds_every_figure(tmp_path):
 def test_failed_law_is_marked_in_every_table(tmp_path):
     md_path, html_path = render_report(_result(tmp_path), tmp_path)
     md = md_path.read_text()
-    assert "⚠ FAILED: 1 of 3 fits failed their sampling gate" in md
-    assert "JKR (R-hat 1.31 > 1.01; 1203 divergences)" in md
+    assert "⚠ FAILED: 1 of 3 fits failed their sampling gate (JKR)" in md
+    gate = _md_table_after(md, "## Warnings").set_index("law")["sampling gate"]
+    assert gate["JKR"] == "✗ **FAILED**: R-hat 1.31 > 1.01; 1203 divergences"
+    assert gate["Hertz"] == "✓ ok"
     for heading in ("## Evidence and LOO", "## Sampler diagnostics"):
         df = _md_table_after(md, heading)
         assert list(df.loc[df["law"] == "JKR", "status"]) == ["**FAILED**"]
@@ -358,9 +360,87 @@ def test_warnings_a_statistician_would_raise(tmp_path):
                for x in w), text
     assert any("Hertz: 3 of 300 drive sweeps have Pareto k > 0.7" in x for x in w), text
     assert "well-posed" not in text  # inside its bounds and range, calibrated: no warning
-    md = render_report(res, tmp_path)[0].read_text()
-    warn = _section(md, "## Warnings")
-    assert warn.count("> ⚠") == len(w) == 4
+    assert len(w) == 4
+
+
+def _flagged(tmp_path):
+    """Three laws, two of them with the same miscalibrated LOO-PIT and the same modulus
+    outside the scene's range, and a data warning."""
+    res = _result(tmp_path)
+    young = _param("young", 224e9, 7e9, 218e9, 230e9)
+    res["laws"] = [
+        _law("hertz", "Hertz", -10.0, 0.1, -5.0, k_bad=3, params=[young], z2=-10.3),
+        _law("visco", "visco", -11.0, 0.1, -5.0, z2=-11.2,
+             params=[young, _param("n", 2.98, 0.02, 2.94, 3.00)]),
+        _law("fine", "fine", -12.0, 0.1, -5.0, status="failed", failures=["R-hat 1.2 > 1.01"],
+             params=[_param("young", 200e9, 5e9, 195e9, 205e9)], z2=-12.1),
+    ]
+    res["laws"][1]["evidence_agree"] = False
+    bad = {"ks_d": 0.21, "ks_p": 2e-6, "tails": 0.31, "mean": 0.5, "calibrated": False,
+           "n": 300}
+    res["checks"] = {"loo_pit": {"hertz": bad, "visco": bad,
+                                 "fine": {"ks_d": 0.03, "ks_p": 0.8, "tails": 0.1,
+                                          "mean": 0.5, "calibrated": True, "n": 300}}}
+    res["data"]["warnings"] = ["2 protocols without a reference Q (not in the likelihood)"]
+    return res
+
+
+def test_first_screen_is_the_evidence_then_one_warnings_table(tmp_path):
+    res = _flagged(tmp_path)
+    md_path, html_path = render_report(res, tmp_path)
+    md = md_path.read_text()
+    # the evidence table comes before every warning; above it only the headline and the
+    # gate's one-line banner
+    evidence, warnings = md.index("## Evidence and LOO"), md.index("## Warnings")
+    assert evidence < warnings < md.index("## Parameters of the preferred law")
+    head = [ln for ln in md[:evidence].splitlines() if "⚠" in ln]
+    assert len(head) == 1 and head[0].startswith("> ⚠ FAILED: 1 of 3 fits"), head
+    for word in ("LOO-PIT", "Pareto", "prior", "scene", "Data warning"):
+        assert word not in md[:evidence], word
+    # one warnings table, a row per law, a column per check, each cell a mark and a value
+    sec = _section(md, "## Warnings")
+    assert "> ⚠" not in sec  # no box per warning
+    df = _md_table_after(md, "## Warnings").set_index("law")
+    assert list(df.index) == ["Hertz", "visco", "fine"]
+    assert list(df.columns) == ["sampling gate", "prior bounds", "E in 190-210 GPa",
+                                "LOO-PIT", "Pareto k > 0.7", "log Z estimators"]
+    assert df.loc["Hertz", "LOO-PIT"] == "⚠ too narrow: D = 0.21, p = 2e-06, tails 31 %"
+    assert df.loc["visco", "LOO-PIT"] == df.loc["Hertz", "LOO-PIT"]
+    assert df.loc["fine", "LOO-PIT"] == "✓ D = 0.03, p = 0.8"
+    assert df.loc["Hertz", "E in 190-210 GPa"] == "⚠ [218, 230] GPa"
+    assert df.loc["fine", "E in 190-210 GPa"] == "✓ [195, 205] GPa"
+    assert df.loc["visco", "prior bounds"].startswith("⚠ n [2.940, 3.000\\]: piled against "
+                                                      "its bound 3")
+    assert df.loc["Hertz", "prior bounds"] == "✓ none"
+    assert df.loc["Hertz", "Pareto k > 0.7"] == "⚠ 3 of 300"
+    assert df.loc["visco", "Pareto k > 0.7"] == "✓ 0 of 300"
+    assert df.loc["fine", "sampling gate"] == "✗ **FAILED**: R-hat 1.2 > 1.01"
+    assert list(df["log Z estimators"]) == ["✓ agree", "⚠ disagree", "✓ agree"]
+    # what each check means: once, however many laws it flags
+    for words in ("too many sweeps in its tails", "needs an unphysical modulus",
+                  "the bound, not the data, cuts the posterior off", "K-fold CV",
+                  "log Z is not settled"):
+        assert md.count(words) == 1, words
+    assert "the LOO-PIT of the shift is not uniform" not in md  # the old per-law sentence
+    # the data's own warning: a short line under the table, and only there
+    line = "Data warning: 2 protocols without a reference Q (not in the likelihood)."
+    assert md.count(line) == 1 and line in sec
+    html = html_path.read_text()
+    assert 'class="caution"' not in html
+    parser = _Refs()
+    parser.feed(html)
+    heads = [t[0][:2] for t in parser.tables]
+    assert heads.index(["law", "status"]) < heads.index(["law", "sampling gate"])
+    assert len([h for h in heads if h == ["law", "sampling gate"]]) == 1
+    # a cell is tinted by its mark
+    assert '<td class="failing">✗ <strong class="failed">FAILED</strong>' in html
+    assert '<td class="warning">⚠ 3 of 300</td>' in html and '<td class="ok">✓ none</td>' in html
+    # one evidence estimator: said once, where its column shows a dash
+    assert "cross-check" not in md
+    for lw in res["laws"]:
+        lw.update(log_z2=None, log_z2_method=None, evidence_agree=None)
+    one = render_report(res, tmp_path)[0].read_text()
+    assert one.count("no cross-check") == 1 and "no cross-check" in _section(one, "## Warnings")
 
 
 def test_posterior_filling_its_prior_is_flagged():

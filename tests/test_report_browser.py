@@ -86,9 +86,14 @@ def _probe(page: Path, out: Path) -> Path:
 
 
 def _report(tmp_path: Path) -> Path:
-    from test_report import _result  # the report inputs of the unit tests
+    from test_report import _flagged  # the report inputs of the unit tests, with warnings
 
-    return render_report(_result(tmp_path), tmp_path)[1]
+    return render_report(_flagged(tmp_path), tmp_path)[1]
+
+
+def _tinted(img: np.ndarray, rgb: tuple[int, int, int]) -> int:
+    """Pixels of exactly the colour ``rgb`` (the CSS tint of a warnings-table cell)."""
+    return int((np.abs(img[..., :3] - np.array(rgb) / 255).max(axis=-1) < 1.5 / 255).sum())
 
 
 def test_report_renders_offline_with_every_image(tmp_path):
@@ -101,16 +106,19 @@ def test_report_renders_offline_with_every_image(tmp_path):
     assert len(flags) == text.count("<img ") == 2 and all(flags), flags
 
     shot = tmp_path / "first_screen.png"
-    _chromium(page, tmp_path, f"--screenshot={shot}", "--window-size=1280,1000",
+    _chromium(page, tmp_path, f"--screenshot={shot}", "--window-size=1280,900",
               "--hide-scrollbars")
     import matplotlib.image as mpimg
 
     img = mpimg.imread(shot)
-    assert img.shape[:2] == (1000, 1280)
+    assert img.shape[:2] == (900, 1280)
     # not blank: text and the warning banner's colour are on the first screen
     assert float(np.std(img[..., :3])) > 0.05
     red = (img[..., 0] > 0.7) & (img[..., 1] < 0.3) & (img[..., 2] < 0.3)
     assert red.sum() > 100  # the red frame of the FAILED banner
+    # the warnings table, below the evidence table, is on the first screen too: its
+    # amber (warning) and green (passed) cells show without scrolling
+    assert _tinted(img, (0xFF, 0xF3, 0xD6)) > 2000 and _tinted(img, (0xEE, 0xF8, 0xEE)) > 2000
 
 
 def test_the_checks_can_fail(tmp_path):

@@ -1,8 +1,4 @@
-"""Atomic output for the CLI layer: a re-export of :mod:`data.io`, which owns files.
-
-``from workflows._io import write_json`` keeps working; new code imports from
-``data.io`` directly.
-"""
+"""Atomic output for the CLI layer: a re-export of :mod:`data.io`, which owns files."""
 
 from beadrod.data.io import atomic_path, write_bytes, write_json, write_text
 

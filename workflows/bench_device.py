@@ -150,7 +150,7 @@ def run(out_dir: Path, quick: bool = False, laws: list[str] | None = None) -> Pa
     for name in names:
         rows += _nuts_rows([name], inputs, chains, warm, draws, method)
         md = _write(path, rows, header)
-    if not quick:  # nested sampling compiles for ~10 s: not in the smoke run
+    if not quick:  # nested sampling is slow to compile: not in the smoke run
         rows.append(_ns_row(inputs, DEFAULTS["evidence"]["live_points"]))
         md = _write(path, rows, header)
     return md

@@ -249,8 +249,8 @@ def run(out_dir: Path, quick: bool = False) -> Path:
                      "err_bridge": br.log_z_err if br else None,
                      "bridge_s": br.wall_s if br else None})
     # the step costs timed in turns, every model's loop once a round, best of ROUNDS:
-    # timed right after each fit, minutes apart, they took this machine's drift with them
-    # (Hertz's step 9.3 us in one run, 13-14 us within the hour)
+    # timed right after each fit, minutes apart, they would take the machine's drift
+    # with them
     best = {k: float("inf") for k in loops}
     for _ in range(_ROUNDS):
         for k, (run_loop, _) in loops.items():

@@ -1,4 +1,6 @@
-"""``beadrod compare`` (every law) and ``beadrod fit --law LAW`` (one law).
+"""``beadrod compare`` (every law) and ``beadrod fit --law LAW`` (one law): the flags,
+resolved to the run's configuration, and :func:`run`, which ``beadrod.compare`` and
+``beadrod.fit`` (workflows.api) call too.
 
 Exit status: 0 when every fit passed its gate, 1 when one did not (``--allow-failed``: 0;
 the failure is marked in every table either way), 2 for an error the user can fix.
@@ -15,7 +17,7 @@ from . import lawfiles
 from .config import DEFAULTS, RUNGS, describe, leaf_keys
 from .outdir import check_out
 
-__all__ = ["register", "add_sampling_args", "flags", "FLAG_KEYS", "config_only_keys",
+__all__ = ["register", "run", "add_sampling_args", "flags", "FLAG_KEYS", "config_only_keys",
            "failed_fits", "check_laws", "EXIT_FAILED"]
 
 EXIT_FAILED = 1
@@ -105,24 +107,43 @@ def check_laws(cfg: dict[str, Any]) -> None:
                             "file out")
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(cfg: dict[str, Any], out: Path, *, force: bool = False, resume: bool = False,
+        report: bool = True, dataset: Any = None) -> Any:
+    """Fit the laws of the resolved configuration ``cfg`` into the output folder ``out``
+    and, with ``report``, write the figures, tables and report there; return the
+    workflows.comparison.Comparison. ``beadrod compare``/``fit`` and
+    ``beadrod.compare``/``fit`` (workflows.api, into a private folder) both run this.
+
+    ``out`` is opened under workflows.outdir's rule (``force``, ``resume``) and given
+    back at the end. ``dataset``: a loaded Dataset to fit instead of ``cfg['data']``
+    (workflows.comparison.dataset_folder). Law names are checked before any data are
+    loaded."""
     from . import runtime
-    from .comparison import n_devices
+    from .comparison import dataset_folder, n_devices, run_compare
+    from .outdir import release
+
+    runtime.host_devices(n_devices(cfg))  # before JAX starts
+    check_out(out, force=force, resume=resume)
+    try:
+        runtime.setup_logging(out, cfg["quiet"])
+        from beadrod.inference.sample import configure
+
+        configure(n_devices(cfg))
+        lawfiles.load(cfg["law_files"])
+        check_laws(cfg)
+        if dataset is not None:
+            cfg["data"] = dataset_folder(dataset, out)
+        return run_compare(cfg, out, resume=resume, report=report)
+    finally:
+        release(out)
+
+
+def _run(args: argparse.Namespace) -> int:
     from .config import resolve
 
     cfg = resolve(args.config, flags(args))
     out = Path(cfg["out"])
-    check_out(out, force=args.force, resume=args.resume)
-    runtime.setup_logging(out, cfg["quiet"])
-    runtime.host_devices(n_devices(cfg))  # before JAX starts
-    from beadrod.inference.sample import configure
-
-    configure(n_devices(cfg))
-    lawfiles.load(cfg["law_files"])
-    check_laws(cfg)
-    from .comparison import run_compare
-
-    result = run_compare(cfg, out, resume=args.resume)
+    result = run(cfg, out, force=args.force, resume=args.resume).result
     log = logging.getLogger("beadrod")
     log.info("preferred law: %s (%s)", result["preferred"], result["preferred_reason"])
     log.info("report: %s", out / "report.html")

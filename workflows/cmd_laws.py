@@ -11,7 +11,8 @@ __all__ = ["register", "describe_laws"]
 
 
 def describe_laws(paths: list[str]) -> list[dict]:
-    """Descriptions of every registered law (built in, then the law files ``paths``)."""
+    """Descriptions of every registered law (built in, then the law files ``paths``):
+    ``beadrod laws`` prints them, ``beadrod.laws()`` (workflows.api) tabulates them."""
     from beadrod.models import registry
 
     lawfiles.load(paths)

@@ -67,7 +67,7 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
                 raise       # a value the user gave: refused, as by `beadrod shift`
             # the scene's own value is outside this law's domain (a surface energy of 0:
             # the adhesive laws are Hertz's there): the law is not defined here, the
-            # scene is (its values printed as 0 or NaN before)
+            # scene is
             out[law.name] = {"label": law.label, "params": {}, "sources": {},
                              "not_defined": str(exc)}
             continue

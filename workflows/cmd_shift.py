@@ -222,7 +222,23 @@ def shift_table(law: str, x: list[float], *, method: str, n: float | None,
     ``builtin`` (default: the paper's scene) and ``scene_path`` exclude each other. A law
     parameter not given takes the scene's value where the scene has one, else its prior
     median; ``sources`` says which. Every value is checked (:func:`check_x`,
-    :func:`check_param`, models.nominal.check_scene_values)."""
+    :func:`check_param`, models.nominal.check_scene_values); a refusal is a
+    workflows.runtime.UserError. ``beadrod shift`` prints this; ``beadrod.shift``
+    (workflows.api) returns it as a DataFrame."""
+    from .runtime import UserError
+
+    try:
+        return _shift_table(law, x, method=method, n=n, scene_path=scene_path,
+                            builtin=builtin, young=young, eta=eta, params=params,
+                            law_files=law_files)
+    except ValueError as exc:  # a law/method/parameter combination that does not exist
+        raise UserError(str(exc)) from None
+
+
+def _shift_table(law: str, x: list[float], *, method: str, n: float | None,
+                 scene_path: str | None, builtin: str | None, young: float | None,
+                 eta: float | None, params: dict[str, float] | None,
+                 law_files: list[str] | None) -> dict:
     import numpy as np
 
     from beadrod.models.nominal import check_scene_values, checked_parameters, linear_state
@@ -269,12 +285,12 @@ def _run(args: argparse.Namespace) -> int:
     from .runtime import UserError
 
     try:
-        table = shift_table(args.law, args.x, method=args.method, n=args.n,
-                            scene_path=args.scene, builtin=args.builtin, young=args.young,
-                            eta=args.eta, params=parse_params(args.param),
-                            law_files=lawfiles.paths_of(args))
-    except ValueError as exc:  # a law/method/parameter combination that does not exist
+        params = parse_params(args.param)
+    except ValueError as exc:
         raise UserError(str(exc)) from None
+    table = shift_table(args.law, args.x, method=args.method, n=args.n,
+                        scene_path=args.scene, builtin=args.builtin, young=args.young,
+                        eta=args.eta, params=params, law_files=lawfiles.paths_of(args))
     if args.json:
         print(json.dumps(table, indent=2, allow_nan=False))
         return 0

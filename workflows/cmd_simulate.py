@@ -1,35 +1,22 @@
 """``beadrod simulate --world NAME --out DIR --seed S``: write a synthetic dataset.
 
 The embedded folders under data/ are regenerated bit for bit by this command with
-the seed recorded in data/README.md.
+the seed recorded in data/README.md. The command is ``beadrod.simulate`` with ``out``
+(workflows.api.simulate).
 """
 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 __all__ = ["register"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from beadrod.data.load import MEASUREMENTS, SCENE, TRUTH
-    from beadrod.data.synth import DEFAULT_SEED, WORLDS, write_world
+    from . import api
 
-    from .outdir import check_out
-    from .runtime import UserError
-
-    if args.world not in WORLDS:
-        raise UserError(f"unknown world '{args.world}'; choose from: "
-                        + "; ".join(f"{k} ({v})" for k, v in WORLDS.items()))
-    seed = DEFAULT_SEED if args.seed is None else args.seed
-    if not 0 <= seed < 2**32:
-        raise UserError(f"--seed must be an integer in [0, 2**32 - 1], got {seed}")
-    out = Path(args.out)
-    check_out(out, force=args.force, outputs=(MEASUREMENTS, SCENE, TRUTH),
-              command="simulate")
-    folder = write_world(args.world, out, seed=seed)
-    print(f"world {args.world!r} (seed {seed}) written to {folder}")
+    ds = api.simulate(args.world, seed=args.seed, out=args.out, force=args.force)
+    print(f"world {args.world!r} (seed {ds.truth['seed']}) written to {ds.path}")
     return 0
 
 

@@ -19,8 +19,8 @@ from . import figure_data, plots, styles
 from .figure_pool import FigureWriter
 from .plots_data import Curve
 
-__all__ = ["make_figures", "theory_curves", "figure_laws", "fitted_specs", "exponent_law",
-           "f0_ranges"]
+__all__ = ["make_figures", "draw_figures", "theory_curves", "figure_laws", "fitted_specs",
+           "exponent_law", "f0_ranges"]
 
 log = logging.getLogger("beadrod")
 
@@ -79,7 +79,7 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
     else the prior median), at first order and on the exact backbone, and on the paper's
     Eq. 25 where that differs from first order (the paper's Fig. 4, plus the exact
     backbone): label -> :class:`Curve`. Only rungs with a fast path (the law's
-    ``shifts``) are drawn: the generic quadrature takes minutes per curve."""
+    ``shifts``) are drawn: the generic quadrature is too slow for a figure."""
     from .cmd_shift import scene_keywords
 
     sc = scene_keywords(scene)
@@ -93,7 +93,7 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
         for rung in ("first_order", "backbone", "paper_eq25"):
             if rung not in law.rungs:
                 continue
-            if rung not in law.shifts:  # the generic quadrature costs minutes per law
+            if rung not in law.shifts:  # the generic quadrature is too slow for a figure
                 log.info("figures: %s has no fast path at rung %s; its nominal curve there "
                          "is left out", law.name, rung)
                 continue
@@ -123,7 +123,7 @@ def fitted_specs(runs: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
     for name, run in runs.items():
         spec = getattr(run, "spec", None)
         if spec is None:
-            # the rung the law was fitted at (its summary says), not today's default
+            # the rung the law was fitted at (its summary says), not the default
             rung = run.summary.get("rung") or cfg.get("rung", "backbone")
             try:
                 spec = comparison_specs([name], rung, lik)[name]
@@ -358,11 +358,19 @@ def make_figures(runs: dict[str, Any], inputs: dict[str, Any], ds: Any, result: 
             entries.append({"path": f"figures/{name}.png", "caption": caption,
                             "section": section})
 
-        specs = fitted_specs(runs, result.get("config", {}))
-        _theory_figures(save, runs, specs, inputs, ds.scene)
-        _data_figures(save, ds, {getattr(spec, "law", None) for spec in specs.values()})
-        _shift_figures(save, runs, specs, inputs, ds, result.get("preferred"))
-        _tension_figures(save, result, out)
-        _evidence_figure(save, result)
-        _diagnostic_figures(save, runs, result)
+        draw_figures(save, runs, inputs, ds, result, out)
     return entries
+
+
+def draw_figures(save: Any, runs: dict[str, Any], inputs: dict[str, Any], ds: Any,
+                 result: dict[str, Any], out: Path) -> None:
+    """Draw every figure of the report, handing each to ``save(fig, name, caption,
+    section)`` (:func:`make_figures` writes them; ``beadrod.compare(...).figures()``
+    keeps them). ``out``: the run's folder, whose idata/ holds the tension's draws."""
+    specs = fitted_specs(runs, result.get("config", {}))
+    _theory_figures(save, runs, specs, inputs, ds.scene)
+    _data_figures(save, ds, {getattr(spec, "law", None) for spec in specs.values()})
+    _shift_figures(save, runs, specs, inputs, ds, result.get("preferred"))
+    _tension_figures(save, result, out)
+    _evidence_figure(save, result)
+    _diagnostic_figures(save, runs, result)

@@ -5,6 +5,11 @@ by side in worker processes (workflows.parallel, run by :data:`JOBS`) -> the ten
 analysis, the figures, the tables and the report (workflows.compare_outputs), under one
 progress display (workflows.progress).
 
+:func:`run_compare` can stop after the fits (``report=False``) and hand back a
+:class:`Comparison`, whose report :func:`write_report` writes into any folder later: the
+notebook API (workflows.api) fits into a private folder and writes the report where and
+when it is asked to.
+
 This module sits above the ones it uses: parallel (which imports only runtime), pipeline
 and compare_outputs never import it, and the commands (cmd_compare, cmd_rungs) and the
 benchmarks do. That keeps the workflows' imports free of cycles
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +37,8 @@ from .pipeline import (
 )
 from .progress import RunProgress, begin, done
 
-__all__ = ["JOBS", "run_compare", "model_specs", "job_steps", "n_devices"]
+__all__ = ["JOBS", "Comparison", "run_compare", "write_report", "dataset_folder",
+           "model_specs", "job_steps", "n_devices"]
 
 log = logging.getLogger("beadrod")
 
@@ -70,6 +77,31 @@ def _figure_data(run: LawRun, spec: Any, inputs: dict[str, Any], ds: Any) -> Any
         log.warning("%s: figure data not computed with the fit (%s: %s)", run.name,
                     type(exc).__name__, exc)
         return None
+
+
+def dataset_folder(ds: Any, out: Path) -> str:
+    """The folder the fits read the loaded Dataset ``ds`` from (the workers read the data
+    from files): its own folder when that holds exactly its table and scene as they are
+    now; otherwise (a simulated dataset held in memory, a table edited after loading)
+    ``ds`` written into the run's folder ``out`` (``data/``) and read back, checked as
+    any dataset folder is."""
+    from beadrod.data.load import dataset_hash, load_dataset, write_dataset
+    from beadrod.data.schema import DataError, canonical_csv
+
+    from .runtime import UserError
+
+    now = dataset_hash(canonical_csv(ds.table), ds.scene_dict)
+    folder = Path(ds.path)
+    try:
+        if load_dataset(folder).data_hash == now:
+            return str(folder.resolve())
+    except (DataError, OSError):
+        pass  # no such folder any more, or not a dataset: written below
+    written = write_dataset(out / "data", ds.table, ds.scene_dict, ds.truth)
+    if load_dataset(written).data_hash != now:  # rows the format reads otherwise
+        raise UserError(f"the dataset given does not read back as itself from {written}: "
+                        "write it with beadrod.data.write_dataset and pass that folder")
+    return str(written.resolve())
 
 
 class _Jobs:
@@ -155,6 +187,38 @@ def _write_report(result: dict[str, Any], runs: dict[str, LawRun], inputs: dict[
     done(log, "report", "tables and report written")
 
 
+@dataclass
+class Comparison:
+    """What the fits of a comparison leave: the result dict the report renders (its
+    ``config`` the resolved configuration), the fitted laws, the model inputs and the
+    processed dataset they were fitted to, the worker count, the timings so far, and
+    ``elapsed_s``, the wall time from the start to the end of the fits and the tension.
+    Enough for :func:`write_report` to write the report into any folder that holds the
+    fits' files."""
+
+    result: dict[str, Any]
+    runs: dict[str, LawRun]
+    inputs: dict[str, Any]
+    ds: Any
+    workers: int
+    timings: dict[str, Any]
+    elapsed_s: float
+
+
+def write_report(comp: Comparison, out: Path, *, figures: bool | None = None) -> None:
+    """The figures (``figures``; default: the configuration's ``report.figures``), the
+    tables and the report of ``comp`` into ``out``, which holds its fits (laws/, idata/).
+    The run's total time counts the fits and this, not the time between them."""
+    if figures is None:
+        figures = bool(comp.result["config"]["report"]["figures"])
+    t_start = time.perf_counter() - comp.elapsed_s
+    try:
+        _write_report(comp.result, comp.runs, comp.inputs, comp.ds, out, figures,
+                      comp.workers, comp.timings, t_start)
+    except Exception as exc:  # noqa: BLE001 - whatever failed, the fits stay
+        raise _report_failed(out, comp.runs, exc) from exc
+
+
 def _report_failed(out: Path, runs: dict[str, LawRun], exc: Exception) -> Exception:
     """The error of a report that failed after the fits were written: the fits stay
     (laws/, idata/; ``--resume`` reuses them), the traceback goes to the log."""
@@ -172,9 +236,11 @@ def _report_failed(out: Path, runs: dict[str, LawRun], exc: Exception) -> Except
 
 
 def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
-                law_names: list[str] | None = None) -> dict[str, Any]:
-    """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write all
-    outputs into ``out`` and return the result dict the report renders.
+                law_names: list[str] | None = None, report: bool = True) -> Comparison:
+    """Fit every law of ``cfg`` (or ``law_names``), run the tension analysis, write the
+    fits into ``out`` and, with ``report``, the figures, tables and report
+    (:func:`write_report`); return the :class:`Comparison` (``.result``: the result dict
+    the report renders).
 
     The fits (and the tension's extra fits) run in ``cfg['workers']`` processes side by
     side (workflows.parallel; 1 = in this process); the numbers do not depend on it.
@@ -210,7 +276,7 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     jobs.sort(key=job_order)
     workers = resolve_workers(cfg["workers"], len(jobs))
     figures = bool(cfg["report"]["figures"])
-    total = sum(job_steps(j) for j in jobs) + int(do_tension) + int(figures) + 1
+    total = sum(job_steps(j) for j in jobs) + int(do_tension) + (int(figures) + 1) * report
     if workers > 1:
         log.info("fitting %d models in %d worker processes", len(jobs), workers)
     with RunProgress(total, len(jobs), what="fits"):
@@ -239,8 +305,8 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
             "laws": laws, "preferred": pref, "preferred_reason": why,
             "tension": tension, "config": cfg,
         }
-        try:
-            _write_report(result, runs, inputs, ds, out, figures, workers, timings, t_start)
-        except Exception as exc:  # noqa: BLE001 - whatever failed, the fits stay
-            raise _report_failed(out, runs, exc) from exc
-    return result
+        comp = Comparison(result, runs, inputs, ds, workers, timings,
+                          time.perf_counter() - t_start)
+        if report:
+            write_report(comp, out, figures=figures)
+    return comp

@@ -51,16 +51,15 @@ DEFAULTS: dict[str, Any] = {
                  "extensions": 2},
     "evidence": {
         # 300 live points: log Z within ~0.3 nat of bridge sampling on the embedded data;
-        # at 100 jaxns ran 0.5-0.9 nat high on 3 of 4 laws for only ~10 s less per law
+        # at 100 jaxns runs 0.5-0.9 nat high on 3 of 4 laws, for little time saved
         "live_points": 300,
         "smc_particles": 600,
         "smc_seeds": 3,
         # bridge: bridge sampling from the NUTS draws; ns: nested sampling (jaxns);
         # smc: tempered SMC over smc_seeds runs (slow for costly likelihoods). The first
         # listed is the one the table ranks by. Default bridge alone: on the embedded data
-        # it agrees with tempered SMC to 0.02 nat (Hertz 992.71 vs 992.69 +- 0.04, JKR
-        # 883.66 vs 883.65 +- 0.03), while jaxns at 300 live points scatters by 0.3-0.5 nat
-        # between seeds and costs ~13x more (186 s against 14 s for the six models): the
+        # it agrees with tempered SMC to 0.02 nat, while jaxns at 300 live points scatters
+        # by 0.3-0.5 nat between seeds and costs an order of magnitude more: the
         # nested-sampling cross-check is opt-in (--evidence bridge,ns).
         "methods": ["bridge"],
     },

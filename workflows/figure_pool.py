@@ -1,9 +1,8 @@
 """Figures written to disk by worker processes while the next ones are drawn.
 
 Why. After the fits, ``beadrod compare`` draws about twenty figures and writes each as
-PNG and PDF. Writing (the layout solve, rasterising, the PDF) was over half of that step
-on the 2-core CPU (the many-panel posterior predictive figures alone 6-7 s each), all on
-one core, while the other one idled: a quarter of a warm compare. Here a figure is
+PNG and PDF. Writing (the layout solve, rasterising, the PDF) is most of that step, on
+one core while the others idle. Here a figure is
 pickled as soon as it is drawn (matplotlib figures pickle, layout engine included) and
 written by :func:`workflows.plots.save_figure` in a worker, so drawing the next figure
 (which computes posterior draws with JAX) and writing the last ones overlap.

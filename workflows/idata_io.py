@@ -20,7 +20,7 @@ __all__ = ["save_idata", "load_idata"]
 def save_idata(idata: az.InferenceData, path: str | os.PathLike) -> Path:
     """Write ``idata`` to netCDF at ``path`` atomically; returns the path."""
     with atomic_path(path) as tmp:
-        # uncompressed: float64 draws barely compress, and zlib cost ~10 % of the write
+        # uncompressed: float64 draws barely compress, and zlib slows the write
         idata.to_netcdf(str(tmp), compress=False)
     return Path(path)
 

@@ -1,8 +1,7 @@
 """The fits of one comparison run side by side, in worker processes.
 
-Why: much of a fit's wall time is XLA compilation (jaxns' nested-sampling program alone
-compiles for 10-17 s per model on the 2-core machine), and a compilation runs on one
-thread, while the sampling phases use about two cores. On a machine with more cores,
+Why: much of a fit's wall time is XLA compilation, which runs on one thread, while the
+sampling phases use about two cores. On a machine with more cores,
 fits side by side use the cores one fit leaves idle; on 2 cores they gain nothing
 (:func:`resolve_workers`).
 
@@ -16,7 +15,7 @@ records to this process through a queue.
 
 Same seed, same numbers: a worker builds the same model from the same data, compiles the
 same programs and draws from the same keys as the in-process path (``workers = 1``), so
-draws and evidence agree to round-off (bit for bit on this machine; within 1e-8 relative
+draws and evidence agree to round-off (bit for bit on one machine; within 1e-8 relative
 in CI, where another process's XLA threads may split reductions differently; checked in
 tests/test_cli.py).
 """
@@ -70,10 +69,9 @@ def resolve_workers(value: int | None, n_jobs: int) -> int:
     this process.
 
     Two on a 2-core machine: one fit keeps both cores busy only while it samples; while it
-    traces and compiles (most of a fit, and single-threaded) the other worker's fit runs.
-    Measured, the default comparison on the 2-core CPU: cold 5:18 with two workers
-    against 6:28 with one, warm 2:19 against 3:02 (each process ~3 GB). Beyond two, one
-    per two cores, as one sampling fit keeps two cores busy."""
+    traces and compiles (most of a fit, and single-threaded) the other worker's fit runs
+    (each process holds ~3 GB). Beyond two, one per two cores, as one sampling fit keeps
+    two cores busy."""
     if not value:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else (os.cpu_count() or 1)

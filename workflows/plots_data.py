@@ -51,7 +51,7 @@ _SHIFT_LABEL = r"$\Delta f/f_0$ [-]"
 
 def law_color(label: str, index: int = 0) -> str:
     """Colour of a law from its name or label (:func:`workflows.styles.color`); ``index``
-    is accepted for old callers and ignored: a label's colour never depends on order."""
+    is ignored: a label's colour never depends on order."""
     del index
     return styles.color(label)
 

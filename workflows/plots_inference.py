@@ -1,8 +1,8 @@
 """Figures of the inference: η tension, evidence, pair and rank plots, LOO-PIT.
 
 Inputs are plain numpy arrays or an ``arviz.InferenceData``. The pair and rank plots are
-drawn by hand from the posterior draws: they cost milliseconds, where the generic
-plotting back-ends cost seconds per figure. Colours, labels and symbols:
+drawn by hand from the posterior draws: far cheaper than the generic plotting
+back-ends. Colours, labels and symbols:
 :mod:`workflows.styles`.
 """
 

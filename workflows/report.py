@@ -8,12 +8,13 @@ torn from its figure. Failed runs are marked in every table and in a banner at t
 Optional keys of the result may be missing; the report then says less.
 
 Order: the headline (the preferred law, or the baseline first when it beats every law),
-the warnings a statistician would raise, the comparison, the preferred law's parameters,
-the truth of a synthetic world, the η tension, every law's parameters and priors, the
-data, the sampler diagnostics, the figures, a glossary, timings and the configuration.
-Tables: :mod:`workflows.report_tables`, :mod:`workflows.report_params`,
-:mod:`workflows.report_tension`; renderers: :mod:`workflows.report_render`. log Z and
-elpd in nats.
+the evidence table, one warnings table (a row per law, a column per check a statistician
+would raise, each explained once below it), the preferred law's parameters, the truth of
+a synthetic world, the η tension, every law's parameters and priors, the data, the
+sampler diagnostics, the figures, a glossary, timings and the configuration. Tables:
+:mod:`workflows.report_tables`, :mod:`workflows.report_warnings`,
+:mod:`workflows.report_params`, :mod:`workflows.report_tension`; renderers:
+:mod:`workflows.report_render`. log Z and elpd in nats.
 """
 
 from __future__ import annotations
@@ -28,7 +29,6 @@ from beadrod.workflows.report_params import (
     GLOSSARY,
     glossary_table,
     param_table,
-    parameter_warnings,
     priors_table,
     truth_tables,
 )
@@ -51,59 +51,14 @@ from beadrod.workflows.report_tables import (
     to_float,
 )
 from beadrod.workflows.report_tension import tension_sentences, tension_table
+from beadrod.workflows.report_warnings import (
+    statistical_warnings,
+    warnings_notes,
+    warnings_table,
+)
 
 __all__ = ["render_report", "comparison_table", "markdown_table", "report_blocks",
            "statistical_warnings", "blocks_to_markdown", "blocks_to_html"]
-
-
-# ------------------------------------------------------------------------------ checks
-def _pit_shape(pit: Mapping) -> str:
-    """What a non-uniform LOO-PIT says, from its tail share and mean against their
-    sampling sd under uniformity (binomial: sqrt(0.1 0.9 / n); mean: sqrt(1/(12 n)))."""
-    n = max(to_float(pit.get("n")), 1.0)
-    z_tails = (to_float(pit.get("tails")) - 0.1) / math.sqrt(0.09 / n)
-    z_mean = (to_float(pit.get("mean")) - 0.5) / math.sqrt(1.0 / (12.0 * n))
-    if z_tails > 2:
-        return "the predictive is too narrow (too many sweeps in its tails)"
-    if z_tails < -2:
-        return "the predictive is too wide (too few sweeps in its tails)"
-    if abs(z_mean) > 2:
-        return ("the data lie above the predictions" if z_mean > 0
-                else "the data lie below the predictions")
-    return "the law's curve misses the data's shape"
-
-
-def statistical_warnings(result: Mapping) -> list[str]:
-    """The warnings of the report's 'Warnings' section, one line each: posteriors against
-    a prior bound or outside the scene's range, miscalibrated LOO-PIT, Pareto k > 0.7,
-    disagreeing evidence estimators."""
-    laws = list(result.get("laws") or [])
-    data = result.get("data") or {}
-    pits = ((result.get("checks") or {}).get("loo_pit") or {})
-    out: list[str] = []
-    for lw in laws:
-        label = law_label(lw)
-        out += parameter_warnings(lw, data.get("young_range_Pa"))
-        pit = pits.get(lw.get("name")) or {}
-        if pit.get("calibrated") is False:
-            out.append(f"{label}: the LOO-PIT of the shift is not uniform (Kolmogorov-Smirnov "
-                       f"D = {fmt_num(pit.get('ks_d'), '.2f')}, p = "
-                       f"{fmt_num(pit.get('ks_p'), '.2g')}; "
-                       f"{100 * to_float(pit.get('tails')):.0f} % of the values in the outer "
-                       f"5 % tails against 10 %): {_pit_shape(pit)}.")
-        bad = to_float(lw.get("pareto_k_bad"))
-        if bad > 0:
-            n = (lw.get("loo") or {}).get("n_points")
-            of = f" of {n}" if n else ""
-            one = bad == 1
-            out.append(f"{label}: {bad:.0f}{of} drive sweeps {'has' if one else 'have'} "
-                       f"Pareto k > 0.7, so PSIS-LOO is unreliable for {'it' if one else 'them'}"
-                       " and elpd_loo is biased (such sweeps dominate the fit; refit without "
-                       "them or use K-fold CV).")
-        if lw.get("evidence_agree") is False:
-            out.append(f"{label}: the two evidence estimators disagree beyond their errors "
-                       "(log Z is not settled).")
-    return out
 
 
 def _no_warnings(result: Mapping) -> str:
@@ -132,8 +87,6 @@ def _data_blocks(data: Mapping) -> list[Block]:
          if data.get("shift_reference") else DASH],
         ["synthetic (ground truth known)", "yes" if data.get("synthetic") else "no"]]
     b.append(("table", ["item", "value"], rows, [False] * len(rows)))
-    for warning in data.get("warnings") or []:  # data.process: what a fit must say
-        b.append(("p", f"Data warning: {warning}."))
     excluded = data.get("excluded") or []
     if excluded:
         b.append(("p", "Excluded drive sweeps, per protocol. The 2 % rule: once a reference "
@@ -225,6 +178,20 @@ def _tension_blocks(result: Mapping) -> list[Block]:
     return b
 
 
+def _warning_blocks(result: Mapping) -> list[Block]:
+    """One table, a row per law and a column per check, what each check means once below
+    it, then the warnings that belong to no law (the data's)."""
+    b: list[Block] = [("h", 2, "Warnings")]
+    if result.get("laws"):
+        b.append(("table", *warnings_table(result)))
+        b.append(("notes", warnings_notes(result)))
+    if not statistical_warnings(result):
+        b.append(("p", _no_warnings(result)))
+    for warning in (result.get("data") or {}).get("warnings") or []:
+        b.append(("p", f"Data warning: {warning}."))  # data.process: what a fit must say
+    return b
+
+
 def report_blocks(result: Mapping) -> list[Block]:
     """The report as a list of blocks, shared by the Markdown and HTML renderers."""
     b: list[Block] = [("h", 1, result.get("title") or "beadrod model comparison")]
@@ -234,27 +201,19 @@ def report_blocks(result: Mapping) -> list[Block]:
     laws = list(result.get("laws") or [])
     failed = [lw for lw in laws if is_failed(lw)]
     if failed:
-        whys = [f"{law_label(lw)} ("
-                + ("; ".join(map(str, lw.get("failures") or [])) or "no reason recorded") + ")"
-                for lw in failed]
         b.append(("warn", f"{FAILED}: {len(failed)} of {len(laws)} fits failed their sampling "
-                          "gate, and their numbers below are not trustworthy: "
-                          + "; ".join(whys) + "."))
-    warns = statistical_warnings(result)
-    b.append(("h", 2, "Warnings"))
-    b += [("caution", w) for w in warns] or [("p", _no_warnings(result))]
+                          f"gate ({', '.join(law_label(lw) for lw in failed)}), and their "
+                          "numbers below are not trustworthy (the Warnings table says why)."))
 
     b.append(("h", 2, "Evidence and LOO"))
-    b.append(("table", *comparison_block(result)))
-    b.append(("p", "log Z: log evidence in nats ± the estimator's own error. Δ log Z: against "
-                   "the preferred law (errors in quadrature); the baseline's row is positive "
-                   "where it beats it. elpd_loo: expected log predictive density of the drive "
-                   "sweeps by Pareto-smoothed leave-one-out ± its standard error; Pareto "
-                   "k > 0.7 marks sweeps where that estimate is unreliable."))
-    if laws and not any(lw.get("log_z2_method") for lw in laws):
-        b.append(("p", "One evidence estimator only, no cross-check: run again with "
-                       "`--evidence bridge,ns` to add nested sampling (jaxns) beside bridge "
-                       "sampling; the table then says whether the two agree."))
+    b.append(("table", *comparison_block(result, checks=False)))
+    b.append(("note", "log Z: log evidence in nats ± the estimator's own error. Δ log Z: "
+                      "against the preferred law (errors in quadrature); the baseline's row "
+                      "is positive where it beats it. elpd_loo: expected log predictive "
+                      "density of the drive sweeps by Pareto-smoothed leave-one-out ± its "
+                      "standard error (its reliability, Pareto k, and the agreement of the "
+                      "evidence estimators: the Warnings table)."))
+    b += _warning_blocks(result)
 
     truth = (result.get("data") or {}).get("truth")
     truth = truth if isinstance(truth, Mapping) else None

@@ -9,11 +9,12 @@ sd by the delta method, sd(e^u) ~ e^mean sd(u)).
 The priors table renders each fitted parameter's prior (:func:`inference.priors.prior`)
 with its justification: a law parameter's from its :class:`models.law.Param` description,
 a nuisance parameter's from the docstring of :mod:`inference.priors`. The checks
-(:func:`parameter_warnings`) are those a statistician would raise on reading the tables:
-a posterior piled against a hard prior bound (its 90 % interval ends within a tenth of
-its own width of the bound, so the bound, not the data, cuts it off), filling its prior
-(the data do not constrain it), or spanning most of its prior while leaning towards one
-bound (the data barely constrain it); and a modulus outside the scene's expected range.
+(:func:`parameter_checks`, columns of the report's warnings table) are those a
+statistician would raise on reading the tables: a posterior piled against a hard prior
+bound (its 90 % interval ends within a tenth of its own width of the bound, so the bound,
+not the data, cuts it off), filling its prior (the data do not constrain it), or spanning
+most of its prior while leaning towards one bound (the data barely constrain it); and a
+modulus outside the scene's expected range.
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ from beadrod.inference.variables import VARIABLES
 from .report_tables import DASH, fmt_num, fmt_pm, is_failed, law_label, pm_decimals, to_float
 
 __all__ = ["Param", "PARAMETERS", "GLOSSARY", "param_info", "display_stats", "prior_text",
-           "prior_reasons", "priors_table", "glossary_table", "param_table",
-           "parameter_warnings", "truth_tables", "BOUND_FRACTION", "WIDE_FRACTION"]
+           "prior_reasons", "priors_table", "glossary_table", "param_table", "ParamCheck",
+           "parameter_checks", "parameter_warnings", "truth_tables", "BOUND_FRACTION",
+           "WIDE_FRACTION"]
 
 BOUND_FRACTION = 0.1
 """An interval end closer to a hard prior bound than this fraction of its width is piled
@@ -343,50 +345,88 @@ def _bounds(name: str) -> tuple[float, float, bool] | None:
     return float(low), float(high), "LogUniform" in type(d).__name__
 
 
-def parameter_warnings(law: Mapping, young_range: Sequence[float] | None) -> list[str]:
-    """Bound and physical-range warnings of one law's posterior summaries."""
-    out: list[str] = []
-    label = law_label(law)
+@dataclass(frozen=True)
+class ParamCheck:
+    """One finding of :func:`parameter_checks`. ``check``: "prior" (a posterior against a
+    hard prior bound; only warnings are listed) or "range" (E against the scene's expected
+    range, inside or not); ``symbol`` and ``interval`` (the 90 % interval in the printed
+    unit, '[212, 236] GPa'): what the warnings table shows, with ``cell``, the finding in a
+    few words; ``sentence``: the finding in full."""
+
+    check: str
+    warns: bool
+    symbol: str
+    interval: str
+    cell: str
+    sentence: str
+
+
+def _prior_verdict(name: str, p: Mapping, unit: str) -> tuple[str, str, str] | None:
+    """(cell, clause, why) of a posterior against a hard prior bound, None if it is not."""
+    b = _bounds(name)
+    if b is None:
+        return None
+    lo_b, hi_b, log = b
+    q05, q95 = to_float(p.get("q05")), to_float(p.get("q95"))
+    f = math.log if log else float
+    width = f(q95) - f(q05)
+    near_lo = f(q05) - f(lo_b) < BOUND_FRACTION * width
+    near_hi = f(hi_b) - f(q95) < BOUND_FRACTION * width
+    share = width / (f(hi_b) - f(lo_b))   # of the prior's range, on its scale
+    bounds = f"[{_g(_shown(name, lo_b))}, {_g(_shown(name, hi_b))}]"
+    which = _g(_shown(name, lo_b if near_lo else hi_b))
+    if near_lo and near_hi:
+        return (f"fills its prior {bounds}", f"fills its prior {bounds}{unit}",
+                "the data do not constrain it, and the evidence depends on the prior's width")
+    if (near_lo or near_hi) and share > WIDE_FRACTION:
+        scale = " on a log scale" if log else ""
+        return (f"spans {share:.0%} of its prior {bounds}{scale}, leaning towards {which}",
+                f"spans {share:.0%} of its prior {bounds}{unit}{scale}",
+                f"the data barely constrain it and lean towards its bound {which}{unit}, "
+                "which cuts the posterior off; the evidence depends on the prior's width")
+    if near_lo or near_hi:
+        return (f"piled against its bound {which}",
+                f"is piled against its prior bound {which}{unit}",
+                "the bound, not the data, cuts the posterior off (the law wants to go beyond "
+                "its physical range)")
+    return None
+
+
+def parameter_checks(law: Mapping, young_range: Sequence[float] | None) -> list[ParamCheck]:
+    """The prior-bound and physical-range checks of one law's posterior summaries."""
+    out: list[ParamCheck] = []
     for p in law.get("params") or []:
         name = str(p.get("name"))
         info = param_info(name)
         unit = "" if info.unit == "–" else f" {info.unit}"
         s = display_stats(p)
         lo_s, hi_s = _fixed_pair(s["q05"], s["q95"], s["sd"])
-        desc = f"{label}: {info.symbol} = {_mean_sd(s)}{unit}, 90 % interval [{lo_s}, {hi_s}]"
-        b = _bounds(name)
-        if b is not None:
-            lo_b, hi_b, log = b
-            q05, q95 = to_float(p.get("q05")), to_float(p.get("q95"))
-            f = math.log if log else float
-            width = f(q95) - f(q05)
-            near_lo = f(q05) - f(lo_b) < BOUND_FRACTION * width
-            near_hi = f(hi_b) - f(q95) < BOUND_FRACTION * width
-            share = width / (f(hi_b) - f(lo_b))   # of the prior's range, on its scale
-            bound_txt = f"[{_g(_shown(name, lo_b))}, {_g(_shown(name, hi_b))}]{unit}"
-            if near_lo and near_hi:
-                out.append(f"{desc}, fills its prior {bound_txt}: the data do not constrain "
-                           "it, and the evidence depends on the prior's width.")
-            elif (near_lo or near_hi) and share > WIDE_FRACTION:
-                which = _shown(name, lo_b if near_lo else hi_b)
-                scale = " on a log scale" if log else ""
-                out.append(f"{desc}, spans {share:.0%} of its prior {bound_txt}{scale}: the "
-                           f"data barely constrain it and lean towards its bound {_g(which)}"
-                           f"{unit}, which cuts the posterior off; the evidence depends on "
-                           "the prior's width.")
-            elif near_lo or near_hi:
-                which = _shown(name, lo_b if near_lo else hi_b)
-                out.append(f"{desc}, is piled against its prior bound {_g(which)}{unit}: "
-                           "the bound, not the data, cuts the posterior off "
-                           "(the law wants to go beyond its physical range).")
-        if name == "young" and young_range is not None and len(young_range) == 2:
+        interval = f"[{lo_s}, {hi_s}]{unit}"
+        desc = f"{info.symbol} = {_mean_sd(s)}{unit}, 90 % interval [{lo_s}, {hi_s}]"
+        verdict = _prior_verdict(name, p, unit)
+        if verdict is not None:
+            cell, clause, why = verdict
+            out.append(ParamCheck("prior", True, info.symbol, interval, cell,
+                                  f"{desc}, {clause}: {why}."))
+        q05, q95 = to_float(p.get("q05")), to_float(p.get("q95"))
+        if (name == "young" and young_range is not None and len(young_range) == 2
+                and math.isfinite(q05) and math.isfinite(q95)):
             r_lo, r_hi = (float(v) for v in young_range)
-            q05, q95 = to_float(p.get("q05")), to_float(p.get("q95"))
-            if q05 > r_hi or q95 < r_lo:
-                out.append(f"{desc}, lies outside the scene's expected range "
-                           f"{_g(r_lo * info.scale)}-{_g(r_hi * info.scale)}{unit}: "
-                           "the law needs an unphysical modulus to fit.")
+            outside = q05 > r_hi or q95 < r_lo
+            where = "outside" if outside else "inside"
+            out.append(ParamCheck(
+                "range", outside, info.symbol, interval, where,
+                f"{desc}, lies {where} the scene's expected range {_g(r_lo * info.scale)}-"
+                f"{_g(r_hi * info.scale)}{unit}"
+                + (": the law needs an unphysical modulus to fit." if outside else ".")))
     return out
+
+
+def parameter_warnings(law: Mapping, young_range: Sequence[float] | None) -> list[str]:
+    """Bound and physical-range warnings of one law's posterior summaries, one sentence
+    each (the warnings among :func:`parameter_checks`)."""
+    label = law_label(law)
+    return [f"{label}: {c.sentence}" for c in parameter_checks(law, young_range) if c.warns]
 
 
 # ------------------------------------------------------------------------------- truth

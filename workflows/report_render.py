@@ -1,12 +1,13 @@
 """The report's two renderers: Markdown and self-contained HTML, from one list of blocks.
 
 Blocks (built by :func:`workflows.report.report_blocks`): ("h", level, text), ("p", text),
-("warn", text) (a failure, red), ("caution", text) (a statistical warning, amber),
-("ul", [items]), ("code", text), ("table", headers, rows, failed-row
-flags), ("fig", path, caption). Text may hold ``**bold**`` and ```code```. The HTML
-embeds every figure as a base64 ``data:`` URI and references no other file; printed to
-PDF, a heading stays with the block after it and a caption with its figure
-(``break-inside: avoid``).
+("note", text) (a table's legend, smaller), ("warn", text) (a failure, red), ("ul",
+[items]), ("notes", [items]) (a list in smaller type), ("code", text), ("table", headers,
+rows, failed-row flags), ("fig", path, caption). Text may hold ``**bold**`` and
+```code```. A table cell that starts with a check's mark (✓, ⚠, ✗) is tinted by it in
+the HTML. The HTML embeds every figure as a base64 ``data:`` URI and references no other
+file; printed to PDF, a heading stays with the block after it and a caption with its
+figure (``break-inside: avoid``).
 """
 
 from __future__ import annotations
@@ -36,11 +37,11 @@ def blocks_to_markdown(blocks: Sequence[Block]) -> str:
         kind = blk[0]
         if kind == "h":
             out.append("#" * blk[1] + " " + md_escape(blk[2]))
-        elif kind == "p":
+        elif kind in ("p", "note"):
             out.append(md_escape(blk[1]))
-        elif kind in ("warn", "caution"):
+        elif kind == "warn":
             out.append(f"> ⚠ {md_escape(blk[1])}")
-        elif kind == "ul":
+        elif kind in ("ul", "notes"):
             out.append("\n".join(f"- {md_escape(item)}" for item in blk[1]))
         elif kind == "table":
             out.append(markdown_table(blk[1], blk[2]))
@@ -52,18 +53,21 @@ def blocks_to_markdown(blocks: Sequence[Block]) -> str:
     return "\n\n".join(out) + "\n"
 
 
-_CSS = """body{font-family:system-ui,sans-serif;max-width:60em;margin:2em auto;padding:0 1em;
-color:#222;line-height:1.45}table{border-collapse:collapse;margin:1em 0;font-size:.9em}
-th,td{border:1px solid #bbb;padding:.25em .6em;text-align:left;vertical-align:top}
+_CSS = """body{font-family:system-ui,sans-serif;max-width:64em;margin:1em auto;padding:0 1em;
+color:#222;line-height:1.45}table{border-collapse:collapse;margin:.6em 0;font-size:.85em}
+th,td{border:1px solid #bbb;padding:.2em .5em;text-align:left;vertical-align:top}
+h1{font-size:1.7em;margin:.3em 0}h2{font-size:1.35em;margin:1em 0 .3em}
 th{background:#eee}tr.failed td{background:#fdd;color:#900}strong.failed{color:#c00}
 .warn{border:2px solid #c00;background:#fee;color:#900;padding:.6em 1em;font-weight:bold}
-.caution{border-left:4px solid #d80;background:#fff6e5;color:#420;padding:.4em 1em}
 figure{margin:1.5em 0}img{max-width:100%}figcaption{font-style:italic;font-size:.9em}
 code{background:#f2f2f2;padding:0 .2em;border-radius:3px}
 pre{background:#f6f6f6;padding:.8em;overflow:auto;font-size:.8em}.missing{color:#c00}
 @media print{body{max-width:none;margin:0}}
 h1,h2,h3{break-after:avoid;page-break-after:avoid}
-figure,table,pre,.keep,.warn,.caution{break-inside:avoid;page-break-inside:avoid}"""
+figure,table,pre,.keep,.warn{break-inside:avoid;page-break-inside:avoid}
+.note{font-size:.85em;color:#444}ul.note{padding-left:1.2em}ul.note li{margin:.15em 0}
+.nw{white-space:nowrap}td.ok{background:#eef8ee}td.warning{background:#fff3d6}
+td.failing{background:#fdd;color:#900}"""
 
 
 def _inline(text: str) -> str:
@@ -77,9 +81,19 @@ def _inline(text: str) -> str:
         return f"<strong{cls}>{inner}</strong>"
 
     esc = re.sub(r"`([^`]+)`", r"<code>\1</code>", esc)
-    # a value and its error on one line, and a unit such as "MPa s" too
+    # a value and its error on one line, a unit such as "MPa s" too
     esc = esc.replace(" ± ", "\u00a0±\u00a0").replace("Pa s", "Pa\u00a0s")
+    esc = esc.replace(" = ", "\u00a0=\u00a0")  # "p = 2e-11" stays on one line
+    esc = re.sub(r"(\d(?:\.\d+)?e[-+]\d+)", r'<span class="nw">\1</span>', esc)
     return re.sub(r"\*\*(.+?)\*\*", bold, esc)
+
+
+_MARKS = {"✓": "ok", "⚠": "warning", "✗": "failing"}
+
+
+def _td(cell: str) -> str:
+    cls = _MARKS.get(str(cell)[:1])
+    return (f'<td class="{cls}">' if cls else "<td>") + f"{_inline(cell)}</td>"
 
 
 def _data_uri(path: Path) -> str | None:
@@ -97,10 +111,12 @@ def _html_block(blk: Block, base_dir: Path) -> str:
         return f"<h{blk[1]}>{_inline(blk[2])}</h{blk[1]}>"
     if kind == "p":
         return f"<p>{_inline(blk[1])}</p>"
+    if kind == "note":
+        return f'<p class="note">{_inline(blk[1])}</p>'
+    if kind == "notes":
+        return '<ul class="note">' + "".join(f"<li>{_inline(i)}</li>" for i in blk[1]) + "</ul>"
     if kind == "warn":
         return f'<p class="warn">⚠ {_inline(blk[1])}</p>'
-    if kind == "caution":
-        return f'<p class="caution">⚠ {_inline(blk[1])}</p>'
     if kind == "ul":
         return "<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in blk[1]) + "</ul>"
     if kind == "table":
@@ -108,7 +124,7 @@ def _html_block(blk: Block, base_dir: Path) -> str:
         rows = ["<tr>" + "".join(f"<th>{_inline(h)}</th>" for h in headers) + "</tr>"]
         for row, bad in zip(body, flags):
             cls = ' class="failed"' if bad else ""
-            rows.append(f"<tr{cls}>" + "".join(f"<td>{_inline(c)}</td>" for c in row) + "</tr>")
+            rows.append(f"<tr{cls}>" + "".join(_td(c) for c in row) + "</tr>")
         return "<table>" + "\n".join(rows) + "</table>"
     if kind == "fig":
         uri = _data_uri(base_dir / blk[1])

@@ -216,8 +216,10 @@ def _common(values: Sequence[str]) -> str | None:
     return vals.pop() if len(vals) == 1 else None
 
 
-def comparison_block(result: Mapping) -> Table:
-    """The evidence and LOO table, one row per law."""
+def comparison_block(result: Mapping, *, checks: bool = True) -> Table:
+    """The evidence and LOO table, one row per law; without ``checks``, without the
+    columns of Pareto k > 0.7 and of the estimators' agreement (the report gives them in
+    its warnings table)."""
     rows = _comparison_rows(result)
     m1 = _common([r["log_z_method"] for r in rows])
     m2 = _common([r["log_z2_method"] for r in rows])
@@ -225,8 +227,9 @@ def comparison_block(result: Mapping) -> Table:
     headers = ["law", "status", "rung", f"log Z ± err ({m1 or 'method'})"]
     if has2:
         headers.append(f"log Z ± err ({m2 or 'second method'})")
-    headers += ["Δ log Z vs preferred", "elpd_loo ± se", "Δ elpd_loo vs preferred",
-                "Pareto k > 0.7", "estimators agree"]
+    headers += ["Δ log Z vs preferred", "elpd_loo ± se", "Δ elpd_loo vs preferred"]
+    if checks:
+        headers += ["Pareto k > 0.7", "estimators agree"]
     body, failed = [], []
     for r in rows:
         z1 = fmt_pm(r["log_z"], r["log_z_err"])
@@ -245,9 +248,10 @@ def comparison_block(result: Mapping) -> Table:
                                                         signed=True),
                   fmt_pm(r["elpd_loo"], r["elpd_loo_se"]),
                   "0 (reference)" if is_ref and math.isfinite(r["delta_elpd_loo"])
-                  else fmt_num(r["delta_elpd_loo"], "+.1f"),
-                  str(r["pareto_k_bad"]) if r["pareto_k_bad"] != "" else DASH,
-                  DASH if agree == "" else ("yes" if agree else "**NO**")]
+                  else fmt_num(r["delta_elpd_loo"], "+.1f")]
+        if checks:
+            cells += [str(r["pareto_k_bad"]) if r["pareto_k_bad"] != "" else DASH,
+                      DASH if agree == "" else ("yes" if agree else "**NO**")]
         body.append(cells)
         failed.append(r["status"] == "failed")
     return headers, body, failed

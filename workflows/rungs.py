@@ -42,8 +42,7 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
     at each unless it comes from a law file.
 
     Why the fast path: without one a rung is the generic quadrature of models.generic at
-    every likelihood call; the rough sphere's first order so ran NUTS for over 19 minutes
-    without finishing on the 2-core CPU, where its backbone fit takes 86 s."""
+    every likelihood call, far too slow for NUTS."""
     from beadrod.models.registry import get_law
 
     from .pipeline import default_model_names

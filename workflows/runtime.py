@@ -56,7 +56,7 @@ def enable_x64() -> None:
     if cache:
         os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", cache)
         # every program, however quick to compile: a warm run otherwise recompiles some
-        # hundreds of small ones (measured: the rough-sphere fit 1:50 -> 1:35 warm)
+        # hundreds of small ones
         os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
     if "jax" in sys.modules:  # imported already (a test, an embedding program)
         import jax
