@@ -141,7 +141,7 @@ def test_missing_q_is_masked_out_of_the_likelihood_term_by_term(law):
 
 def test_report_data_section_counts_protocols_without_q(tmp_path, scene_text):
     from beadrod.workflows.compare_outputs import data_block
-    from beadrod.workflows.report import _data_blocks
+    from beadrod.workflows.report import _data_blocks, _warning_blocks
 
     d = folder(tmp_path, scene_text, [HEADER, set_cell(GOOD[0], "q_factor", "nan"), *GOOD[1:]])
     block = data_block(process(load_dataset(d)))
@@ -149,7 +149,9 @@ def test_report_data_section_counts_protocols_without_q(tmp_path, scene_text):
     blocks = _data_blocks(block)
     rows = dict(next(b for b in blocks if b[0] == "table")[2])
     assert rows["protocols without a reference Q (not in the likelihood)"] == "1"
-    assert any(b[0] == "p" and "no reference Q" in b[1] for b in blocks)
+    # the data's warnings stand under the report's warnings table, once
+    warned = [b for b in _warning_blocks({"data": block}) if b[0] == "p"]
+    assert sum("no reference Q" in b[1] for b in warned) == 1
 
 
 # --- 16: no drive sweep --------------------------------------------------------------------
