@@ -9,6 +9,13 @@ user's home: every test session gets its own cache directory. The controlling pr
 sets it before xdist starts its workers, which inherit it, so a program compiled in one
 worker is read by the others.
 A cache the caller names in BEADROD_JAX_CACHE (a path, or "" for none) is respected.
+Every worker uses it from its first program on, not only once a test has run a command:
+the suite compiles the same programs again and again (a law's fit on the same data; the
+sampler's seed is an argument), and reading one costs a small part of compiling it.
+Only programs that took 0.5 s or more to compile are kept (a command keeps every one):
+JAX writes an entry in place, without a lock, so a process can read an entry another is
+still writing (the comparison's worker processes start in step and compile the same
+small programs op by op), which costs a recompile and a warning on the command's stderr.
 """
 
 import gc
@@ -23,6 +30,20 @@ jax.config.update("jax_enable_x64", True)
 if "BEADROD_JAX_CACHE" not in os.environ:
     os.environ["BEADROD_JAX_CACHE"] = os.path.join(tempfile.gettempdir(),
                                                    f"beadrod-test-jax-pid{os.getpid()}")
+_CACHE_DIR = os.environ["BEADROD_JAX_CACHE"] or None
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
+
+
+def _use_the_cache() -> None:
+    # as workflows.runtime.enable_x64 sets it for a command (which keeps the threshold
+    # above); `beadrod bench` switches it off in its process, this switches it back
+    if _CACHE_DIR and jax.config.jax_compilation_cache_dir != _CACHE_DIR:
+        jax.config.update("jax_compilation_cache_dir", _CACHE_DIR)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs",
+                          float(os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"]))
+
+
+_use_the_cache()
 
 
 def pytest_configure(config):
@@ -61,6 +82,7 @@ _MAP_GUARD = 16_000
 @pytest.fixture(autouse=True)
 def _release_compiled_programs(request):
     yield
+    _use_the_cache()
     before = after = _map_count()
     if before > _MAP_GUARD:
         jax.clear_caches()
