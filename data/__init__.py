@@ -2,9 +2,9 @@
 writes, strict CSV reading), protocol processing, resonance extraction, and the
 synthetic worlds shipped as the embedded datasets. Imports only ``models``."""
 
-from .extract import CurveFit, extract_resonance, read_curve
-from .load import Dataset, load_dataset, write_dataset
-from .process import (
+from beadrod.data.extract import CurveFit, extract_resonance, read_curve
+from beadrod.data.load import Dataset, load_dataset, write_dataset
+from beadrod.data.process import (
     ProcessedDataset,
     default_path,
     load_default,
@@ -12,8 +12,8 @@ from .process import (
     process,
     static_overlap_weight,
 )
-from .schema import DataError
-from .synth import DEFAULT_SEED, generate, world_names, write_world
+from beadrod.data.schema import DataError
+from beadrod.data.synth import DEFAULT_SEED, generate, world_names, write_world
 
 __all__ = [
     "CurveFit",

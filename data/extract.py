@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .io import read_csv_table
-from .schema import DataError
+from beadrod.data.io import read_csv_table
+from beadrod.data.schema import DataError
 
 __all__ = ["CurveFit", "extract_resonance", "read_curve", "CURVE_COLUMNS", "MIN_CURVE_POINTS"]
 

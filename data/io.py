@@ -29,7 +29,7 @@ from typing import Any
 
 import pandas as pd
 
-from .schema import DataError
+from beadrod.data.schema import DataError
 
 __all__ = ["atomic_path", "write_text", "write_bytes", "write_json", "CsvTable",
            "read_csv_table", "MANIFEST_ENV", "record_written", "file_sha256"]

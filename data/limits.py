@@ -22,7 +22,7 @@ Bounds [unit] and why:
   as V (or V as mV), not a drive of that setup. Never below VOLTAGE_FLOOR_V =
   1e-9 V, under the Johnson noise of a 50 ohm source over 1 kHz (~30 nV): no
   set drive is that small.
-* ``q_factor`` at most q_max (``models.scenes.QUALITY_FACTOR_MAX`` = 1e5): the
+* ``q_factor`` at most q_max (``models.scene.QUALITY_FACTOR_MAX`` = 1e5): the
   scene's bound, ten times the Q of steel's own internal friction; a bead held
   in a lossy contact cannot ring longer than its material does.
 * ``step`` at most STEP_MAX = 1e6: a million sweeps of about a minute each are

@@ -1,7 +1,7 @@
 """Reading and writing dataset folders.
 
 A dataset folder holds ``measurements.csv`` (see :mod:`data.schema`),
-``scene.toml`` (the simulator's scene format, :mod:`models.scenes`), optionally
+``scene.toml`` (the simulator's scene format, :mod:`models.scene`), optionally
 ``truth.json`` (synthetic worlds) and the raw sweep curves that the ``curve``
 column points to (paths relative to the folder).
 
@@ -26,13 +26,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from beadrod.data.extract import extract_resonance, read_curve
+from beadrod.data.io import read_csv_table, write_bytes, write_json, write_text
+from beadrod.data.limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
+from beadrod.data.scene_check import check_scene_units
+from beadrod.data.schema import DataError, canonical_csv, curve_path, validate_table, where
 from beadrod.models.tomlfile import describe_value
-
-from .extract import extract_resonance, read_curve
-from .io import read_csv_table, write_bytes, write_json, write_text
-from .limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
-from .scene_check import check_scene_units
-from .schema import DataError, canonical_csv, curve_path, validate_table, where
 
 __all__ = [
     "Dataset",
@@ -77,7 +76,8 @@ def scene_limits(scene: Any) -> Limits:
     """Plausibility limits from the scene (:mod:`data.limits`): the sweep band, the
     amplitude ceiling AMPLITUDE_LIMIT_FACTOR x (Hertz delta0 under the scene's load),
     the drive range and the scene's bound on Q."""
-    from beadrod.models import hertz, scenes
+    from beadrod.models import scene as scenes
+    from beadrod.models.laws import hertz
 
     delta0 = float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
                                         radius=float(scene.radius)))
@@ -89,7 +89,7 @@ def scene_limits(scene: Any) -> Limits:
 def load_scene_file(path: Path) -> tuple[Any, dict]:
     """(Scene, scene dict) from a scene TOML; any failure becomes a one-line
     :class:`DataError` that names the file once."""
-    from beadrod.models import scenes
+    from beadrod.models import scene as scenes
 
     if not path.exists():
         raise DataError(f"{path}: scene file is missing (a dataset folder needs {SCENE})")

@@ -31,8 +31,8 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
-from .load import MEASUREMENTS, Dataset, load_dataset
-from .schema import DataError
+from beadrod.data.load import MEASUREMENTS, Dataset, load_dataset
+from beadrod.data.schema import DataError
 
 __all__ = [
     "ProcessedDataset",
@@ -49,8 +49,8 @@ TWO_PERCENT = 0.02
 
 
 def static_overlap_weight(scene: Any) -> float:
-    """delta0 [m] from the Hertz law under the scene's load (models.hertz.static_overlap)."""
-    from beadrod.models import hertz
+    """delta0 [m] from the Hertz law under the scene's load (models.laws.hertz.static_overlap)."""
+    from beadrod.models.laws import hertz
 
     return float(hertz.static_overlap(float(scene.load), e_star=float(scene.e_star),
                                       radius=float(scene.radius)))
@@ -58,8 +58,8 @@ def static_overlap_weight(scene: Any) -> float:
 
 def overlap_from_f0(f0: np.ndarray, scene: Any) -> np.ndarray:
     """delta0 [m] implied by measured linear resonances f0 [Hz] under the scene's load
-    (models.hertz.overlap_from_frequency: 3 F0 / (2 m omega0^2))."""
-    from beadrod.models import hertz
+    (models.laws.hertz.overlap_from_frequency: 3 F0 / (2 m omega0^2))."""
+    from beadrod.models.laws import hertz
 
     return np.asarray(hertz.overlap_from_frequency(np.asarray(f0, np.float64), float(scene.load),
                                                    float(scene.mass)), dtype=np.float64)

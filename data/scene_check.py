@@ -6,18 +6,18 @@ modulus E* under its weight resonates at f0 ~ E*^(1/3) rho^(-1/3) R^(-5/6) (Hert
 unit slip moves it by orders of magnitude: a radius written in millimetres as metres
 (7.938 for 7.938e-3) divides f0 by 1000^(5/6) ~ 300, a density in g/cm^3 written as
 kg/m^3 (7.7 for 7700) multiplies it by 10. The plausibility bounds of
-:data:`models.scenes.BOUNDS` cannot see either (7.938 m and 7.7 kg/m^3 are physical
+:data:`models.scene.BOUNDS` cannot see either (7.938 m and 7.7 kg/m^3 are physical
 values, just not this setup's).
 
 The range the scene implies (:func:`implied_f0_range`) is taken over the contact laws'
 prior ranges, not at one nominal point: E* from the scene's materials (and its
 ``young_range``) and from the Young's modulus prior the elastic laws fit
-(:data:`models.law.YOUNG`); Hertz (:func:`models.hertz.linear_frequency`) gives the
+(:data:`models.law.YOUNG`); Hertz (:func:`models.laws.hertz.linear_frequency`) gives the
 lower end. Adhesion stiffens the contact, by at most JKR's (DMT and Maugis-Dugdale lie
 between Hertz and JKR), with the scene's surface energy and up to the 97.5 % quantile of
 the surface energy prior (:data:`models.law.GAMMA`): JKR's contact radius under the load
 F is Hertz's under F1 = F + 2 Fc + 2 (Fc (F + Fc))^(1/2), Fc its pull-off force
-(:func:`models.jkr_contact.contact_radius`), and its stiffness 2 E* a (3 - 3u)/(3 - u)
+(:func:`models.laws.jkr.contact.contact_radius`), and its stiffness 2 E* a (3 - 3u)/(3 - u)
 is at most Hertz's 2 E* a there, so Hertz under F1 bounds the upper end (one model
 function, evaluated on one small grid). A law whose f0 is a free parameter (the rough
 power law's reference overlap) implies nothing about the scene and is not used.
@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .schema import DataError
+from beadrod.data.schema import DataError
 
 __all__ = ["F0_TOLERANCE", "implied_f0_range", "check_scene_units", "UNIT_SLIPS"]
 
@@ -73,8 +73,9 @@ def implied_f0_range(scene: Any) -> tuple[float, float] | None:
     prior ranges (module docstring); None when no finite value results."""
     import jax
 
-    from beadrod.models import hertz, jkr_contact
     from beadrod.models.law import GAMMA, YOUNG
+    from beadrod.models.laws import hertz
+    from beadrod.models.laws.jkr import contact
 
     nu = float(scene.bead_material.poisson)
     same = 2.0 * (1.0 - nu * nu)  # E* of bead and rod of one material: E / (2 (1 - nu^2))
@@ -87,7 +88,7 @@ def implied_f0_range(scene: Any) -> tuple[float, float] | None:
     loads = [load]
     with jax.enable_x64(True), np.errstate(all="ignore"):
         for g in gammas:
-            fc = float(jkr_contact.pull_off_force(gamma=g, radius=radius))
+            fc = float(contact.pull_off_force(gamma=g, radius=radius))
             loads.append(load + 2.0 * fc + 2.0 * math.sqrt(fc * (load + fc)))
         f = np.asarray(hertz.linear_frequency(np.asarray(loads)[None, :], mass,
                                               e_star=np.asarray(e_star)[:, None],

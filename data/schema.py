@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
+from beadrod.data.limits import AMPLITUDE_LIMIT_FACTOR, Limits, check_value, show
 
 __all__ = [
     "DataError",

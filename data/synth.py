@@ -6,14 +6,14 @@ protocol p:
 
 * linear resonance f0_p ~ U(2.5, 3.0) kHz, wider than Hertz and JKR allow
   (Fig. 6), carried by the static overlap
-  delta0_p = 3 F0 / (2 m (2 pi f0_p)^2)  (models.hertz.overlap_from_frequency);
+  delta0_p = 3 F0 / (2 m (2 pi f0_p)^2)  (models.laws.hertz.overlap_from_frequency);
 * linear Q_p log-uniform in [20, 100], independent of f0 (Fig. 8);
 * drive steps k = 1..n_p (n_p in 4..12), x_k = delta_a/delta0_p geometric up to
   x_max,p in [0.5, 1]; drive voltage V = x delta0_p / (Q_p d) with d the scene's
   base displacement per volt, so delta_a = Q_p d V (a linear loss: Delta(1/Q) = 0);
-* shift s(x) = models.viscoelastic.shift_paper_eq25(x, A, omega0_p), the paper's
+* shift s(x) = models.laws.viscoelastic.shift_paper_eq25(x, A, omega0_p), the paper's
   eta = 1.05 MPa s curve as the paper computed it (A from
-  models.viscoelastic.damping_constant with E = 210 GPa, the paper's Sec. 6 value);
+  models.laws.viscoelastic.damping_constant with E = 210 GPa, the paper's Sec. 6 value);
   up sweeps read s (1 - h x), down sweeps s (1 + h x) (softening hysteresis);
 * after drive step k the linear resonance drifts to f0_p (1 + c_p x_k^2) with
   |c_p| <= 1.2 % (slow wear); in four protocols it also drops by 2.5-4 % after one
@@ -103,7 +103,7 @@ def _rounded(obj: Any, digits: int = 12) -> Any:
 
 
 def _paper_scene(world: str = "paper_like") -> tuple[Any, dict]:
-    from beadrod.models import scenes
+    from beadrod.models import scene as scenes
 
     d = scenes.scene_to_dict(scenes.builtin_scene("paper"))
     d["name"] = world
@@ -118,7 +118,7 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     import jax
     import jax.numpy as jnp
 
-    from beadrod.models import hertz, viscoelastic
+    from beadrod.models.laws import hertz, viscoelastic
 
     cfg = _PAPER_LIKE
     rng = np.random.default_rng(seed)
@@ -215,7 +215,7 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     truth = {
         "world": "paper_like", "seed": int(seed), "generator": "data.synth",
         "kind": "phenomenological",
-        "shift_law": "models.viscoelastic.shift_paper_eq25(x, damping_constant=A, "
+        "shift_law": "models.laws.viscoelastic.shift_paper_eq25(x, damping_constant=A, "
                      "omega=2 pi f0_p), x = delta_a / delta0_p; up sweeps s (1 - h x), "
                      "down sweeps s (1 + h x)",
         "parameters": {**cfg, "damping_constant_A_s": a_damp,
@@ -233,13 +233,14 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
 
 
 def _hbm_sweeps(zeta: np.ndarray, drive: np.ndarray, down: np.ndarray, cfg: dict):
-    """First-harmonic amplitude x(Omega) of stepped HBM sweeps (models.hbm.sweep), batched.
+    """First-harmonic amplitude x(Omega) of stepped HBM sweeps
+    (models.ladder.harmonic_balance.sweep), batched.
 
     Returns (Omega grid ascending (F,), x on that grid (S, F), converged (S,))."""
     import jax
     import jax.numpy as jnp
 
-    from beadrod.models import hbm, oscillator
+    from beadrod.models.ladder import harmonic_balance, oscillator
 
     lo, hi, step = cfg["omega_grid"]
     om = np.arange(lo, hi + 0.5 * step, step)
@@ -247,7 +248,7 @@ def _hbm_sweeps(zeta: np.ndarray, drive: np.ndarray, down: np.ndarray, cfg: dict
 
     def one(z, e, rev):
         o = jnp.where(rev, jnp.asarray(om)[::-1], jnp.asarray(om))
-        xs, ok = hbm.sweep(oscillator.hertz(z), e, o, harmonics=h)
+        xs, ok = harmonic_balance.sweep(oscillator.hertz(z), e, o, harmonics=h)
         amp = jnp.sqrt(xs[:, 1] ** 2 + xs[:, 2] ** 2)
         return jnp.where(rev, amp[::-1], amp), jnp.all(ok)
 
@@ -262,7 +263,7 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     read by :func:`data.extract.extract_resonance` from the curve with 1 % vibrometer
     noise per point. Per-protocol delta0_p scatter (local curvature/modulus of the
     contact) sets f0_p = (1/2 pi)(3 g / (2 delta0_p))^(1/2)."""
-    from .extract import extract_resonance
+    from beadrod.data.extract import extract_resonance
 
     cfg = _HERTZ_DYNAMICS
     rng = np.random.default_rng(seed)
@@ -323,7 +324,8 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     truth = {
         "world": "hertz_dynamics", "seed": int(seed), "generator": "data.synth",
         "kind": "physical",
-        "model": "models.hbm.sweep of models.oscillator.hertz(zeta_p) (base-excited Hertz "
+        "model": "models.ladder.harmonic_balance.sweep of models.ladder.oscillator.hertz(zeta_p) "
+                 "(base-excited Hertz "
                  "oscillator, unilateral contact, linear dashpot), stepped sweeps up and down",
         "parameters": {**cfg, "displacement_per_volt_m_V": d_per_v},
         "protocols": protocols,
@@ -350,7 +352,7 @@ def generate(
 
 def write_world(world: str, out_dir: str | Path, seed: int = DEFAULT_SEED) -> Path:
     """Generate a world and write it as a dataset folder; return the folder."""
-    from .load import write_dataset
+    from beadrod.data.load import write_dataset
 
     table, scene_dict, truth = generate(world, seed)
     return write_dataset(out_dir, table, scene_dict, truth)

@@ -1,23 +1,32 @@
 """beadrod inference: NumPyro models per contact law, NUTS, evidence, diagnostics,
 model comparison, the Q-versus-shift tension and simulation-based calibration.
 
-Entry points call :func:`inference.sample.configure` before JAX initialises (host
+Entry points call :func:`inference.sampling.sample.configure` before JAX initialises (host
 devices for parallel chains, float64). Importing this package does not import jaxns.
 Nothing here writes files or plots: it returns InferenceData and arrays, and
-``workflows`` persists them (workflows.idata_io, workflows.sbc_outputs).
+``workflows`` persists them (workflows.pipeline.idata_io, workflows.pipeline.sbc_outputs).
 """
 
-from .compare import DataHashMismatch, evidence_table, log_bayes_factor, loo_table
-from .diagnostics import DiagnosticsFailed, Verdict, check, loo_report
-from .evidence import (
+from beadrod.inference.evidence.log_z import (
     EvidenceResult,
     combined_agreement,
     linear_gaussian_log_evidence,
     nested_sampling_log_z,
     smc_log_z,
 )
-from .likelihood import design_inputs, model_inputs, simulate, without_observations
-from .numpyro_models import (
+from beadrod.inference.evidence.ranking import (
+    DataHashMismatch,
+    evidence_table,
+    log_bayes_factor,
+    loo_table,
+)
+from beadrod.inference.model.likelihood import (
+    design_inputs,
+    model_inputs,
+    simulate,
+    without_observations,
+)
+from beadrod.inference.model.numpyro_models import (
     LAWS,
     RUNGS,
     ForwardModelUnavailable,
@@ -27,7 +36,8 @@ from .numpyro_models import (
     curve_draws,
     paper_spec,
 )
-from .sample import FitResult, configure, describe, idata_coords, run_nuts
+from beadrod.inference.sampling.diagnostics import DiagnosticsFailed, Verdict, check, loo_report
+from beadrod.inference.sampling.sample import FitResult, configure, describe, idata_coords, run_nuts
 
 __all__ = [
     "LAWS", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",

@@ -1,6 +1,6 @@
 """The contact-law object: everything the project knows about one law, in one place.
 
-A law is a :class:`ContactLaw` built in the law's own module (``models/hertz.py`` holds
+A law is a :class:`ContactLaw` built in the law's own module (``models/laws/hertz.py`` holds
 ``LAW``, and so on) and listed once, in :mod:`models.registry`. It carries
 
 * its parameters (:class:`Param`: name, unit, label, prior, description);
@@ -8,7 +8,7 @@ A law is a :class:`ContactLaw` built in the law's own module (``models/hertz.py`
   delta [m] and keyword parameters (law parameters and scene quantities by name);
 * optional fast paths: closed forms or tables of the static overlap, of the overlap a
   measured resonance implies, and of the shift at a rung. Anything not given is
-  computed by the generic numerics of :mod:`models.generic` from the force alone;
+  computed by the generic numerics of :mod:`models.ladder.generic` from the force alone;
 * its linear Q where it has a loss channel, its rungs and its reference.
 
 Keyword conventions. Every function of a law receives the *resolved* keywords of
@@ -22,7 +22,7 @@ what they need by name and ignore the rest (``**_``).
 Protocol-to-protocol scatter (remounting the bead). By default the law's stiffness
 scale scatters: F_p = s_p F(delta; theta), so the measured f0_p fixes the static
 overlap through F(delta0)/F'(delta0) = F0/(m omega0_p^2), independently of s_p
-(:func:`models.generic.overlap_from_frequency`: Hertz gives 3 F0/(2 m omega0^2), a power
+(:func:`models.ladder.generic.overlap_from_frequency`: Hertz gives 3 F0/(2 m omega0^2), a power
 law n F0/(m omega0^2)). A law whose scatter enters otherwise overrides
 ``overlap_from_frequency`` in its own module and says why there.
 
@@ -41,7 +41,7 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
-from .rungs import LADDER
+from beadrod.models.rungs import LADDER
 
 __all__ = ["Prior", "Param", "Prepared", "ContactLaw", "SCENE_KEYS", "RungUnavailable",
            "effective_modulus", "prior_median", "sampler_site"]
@@ -116,7 +116,7 @@ class Param:
     parameter is not given; otherwise the prior median). ``domain``: [lo, hi] (``(lo, hi]``
     with ``open_low``), the values for which the law's functions are defined (outside
     them they return NaN); None: every value its prior's kind allows. ``bounds``: the
-    :data:`models.scenes.BOUNDS` key of the physical range of its quantity. ``what``:
+    :data:`models.scene.BOUNDS` key of the physical range of its quantity. ``what``:
     what it is, in messages. The commands refuse a value outside either
     (:meth:`problem`).
     """
@@ -144,7 +144,7 @@ class Param:
         """(low, high, why) of the physical bounds of its quantity (None: none)."""
         if self.bounds is None:
             return None
-        from .scenes import BOUNDS
+        from beadrod.models.scene import BOUNDS
 
         return BOUNDS[self.bounds]
 
@@ -217,7 +217,7 @@ class ContactLaw:
       [rad/s] among the keywords (per sweep);
     * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
     * ``restoring_force(**kw)`` (with ``delta0``) -> (P', divided, flight acceleration) of
-      the dimensionless oscillator, as :func:`models.generic.restoring_force` computes them
+      the dimensionless oscillator, as :func:`models.ladder.generic.restoring_force` computes them
       from the force: an exact form that is cheaper, for a law whose force is itself a
       root solve (the generic backbone then evaluates no force);
     * ``contact_edge(**kw)`` -> the overlap [m] below which the surfaces separate
@@ -229,7 +229,7 @@ class ContactLaw:
 
     ``rungs``: the rungs the law computes (those of :data:`models.rungs.FIT_RUNGS` are the
     ones it can be fitted at); those without a ``shifts`` entry are served by
-    :mod:`models.generic` and :mod:`models.generic_dynamics` (exact, slow).
+    :mod:`models.ladder.generic` and :mod:`models.ladder.generic_dynamics` (exact, slow).
     ``in_default_comparison`` False keeps a law out of ``beadrod compare`` unless it is
     asked for by name (the law says why in its ``description``).
 
@@ -346,7 +346,7 @@ class ContactLaw:
         """Static overlap delta0 [m] under ``load`` (fast path or generic root solve)."""
         if self.static_overlap is not None:
             return self.static_overlap(**kw)
-        from .generic import static_overlap
+        from beadrod.models.ladder.generic import static_overlap
 
         return static_overlap(self, **kw)
 
@@ -354,7 +354,7 @@ class ContactLaw:
         """delta0 [m] that the measured linear resonance f0 [Hz] implies (see module doc)."""
         if self.overlap_from_frequency is not None:
             return self.overlap_from_frequency(f0, **kw)
-        from .generic import overlap_from_frequency
+        from beadrod.models.ladder.generic import overlap_from_frequency
 
         return overlap_from_frequency(self, f0, **kw)
 
@@ -362,9 +362,9 @@ class ContactLaw:
         """f0 [Hz] of a protocol whose static overlap is delta0 [m]: the inverse of
         :meth:`overlap_at`. The law's closed form; for the default scatter treatment
         (no ``overlap_from_frequency``) omega0^2 = load F'(delta0)/(m F(delta0)); else a
-        Newton solve of :meth:`overlap_at` (:func:`models.generic.frequency_from_overlap`).
+        Newton solve of :meth:`overlap_at` (:func:`models.ladder.generic.frequency_from_overlap`).
         """
-        from . import generic
+        from beadrod.models.ladder import generic
 
         if self.frequency_from_overlap is not None:
             return self.frequency_from_overlap(delta0, **kw)
@@ -384,8 +384,8 @@ class ContactLaw:
         A fast path is used when the law has one and ``fast`` (outside its domain,
         :meth:`in_domain`, it holds a value that is not the law's); otherwise the generic
         quadrature of
-        :mod:`models.generic` (exact, but far too slow for a sampler), or for 'series',
-        'harmonic_balance' and 'time_integration' :mod:`models.generic_dynamics` (options
+        :mod:`models.ladder.generic` (exact, but far too slow for a sampler), or for 'series',
+        'harmonic_balance' and 'time_integration' :mod:`models.ladder.generic_dynamics` (options
         ``q_factor``, ``harmonics``, ... there).
         """
         if rung not in self.rungs:
@@ -394,7 +394,7 @@ class ContactLaw:
         fn = self.shifts.get(rung) if fast else None
         if fn is not None:
             return fn(jnp.asarray(x, float), **kw)
-        from . import generic
+        from beadrod.models.ladder import generic
 
         if "delta0" not in kw:
             kw = {**kw, "delta0": self.overlap(**kw)}
@@ -402,10 +402,11 @@ class ContactLaw:
             return generic.first_order_shift(self, x, **kw)
         if rung == "backbone":
             return generic.backbone_shift(self, x, **kw)
-        from . import generic_dynamics as dyn
+        from beadrod.models.ladder import generic_dynamics
 
-        run = {"series": dyn.series_shift, "harmonic_balance": dyn.hbm_shift,
-               "time_integration": dyn.timeint_shift}.get(rung)
+        run = {"series": generic_dynamics.series_shift,
+               "harmonic_balance": generic_dynamics.hbm_shift,
+               "time_integration": generic_dynamics.timeint_shift}.get(rung)
         if run is not None:
             return run(self, x, **kw)
         raise RungUnavailable(f"law '{self.name}': rung {rung!r} has no generic form; "

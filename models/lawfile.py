@@ -20,7 +20,7 @@ The file's law gets every rung the generic numerics give (first order, backbone)
 default protocol-scatter treatment (a stiffness scale per protocol) and, when its
 dimensionless backbone turns out not to depend on its parameters or the overlap (a
 shape-invariant law, such as a Hertz written from scratch), a fast table built on load
-(:mod:`models.autotable`). A file that breaks the contract raises :class:`LawFileError`
+(:mod:`models.tables.autotable`). A file that breaks the contract raises :class:`LawFileError`
 naming the file and what is wrong.
 
 A law file is Python code: loading it runs it, with the user's rights. Everything it
@@ -43,9 +43,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import registry
-from .autotable import attach_fast_backbone
-from .law import SCENE_KEYS, YOUNG, ContactLaw, Param, Prior, prior_median
+from beadrod.models import registry
+from beadrod.models.law import SCENE_KEYS, YOUNG, ContactLaw, Param, Prior, prior_median
+from beadrod.models.tables.autotable import attach_fast_backbone
 
 __all__ = ["LawFileError", "load_law_file", "NAME_MAX"]
 

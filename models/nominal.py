@@ -7,13 +7,13 @@ the median of its prior. At those values the linear state under the static load 
 [N] follows from the law alone:
 
     delta0 from F(delta0) = load (the law's static overlap),
-    K0 = F'(delta0) [N/m] (autodiff, :func:`models.generic.stiffness`),
+    K0 = F'(delta0) [N/m] (autodiff, :func:`models.ladder.generic.stiffness`),
     omega0 = sqrt(K0 / m) [rad/s], f0 = omega0 / (2 pi) [Hz],
     Q = the law's linear Q at omega0 (only for a law with a loss channel).
 
 A scene quantity set by hand (``beadrod shift --param radius=...``) is held to the rules
 of ``scene.toml`` (:func:`check_scene_values`): the value goes into the scene's own layout
-and the scene's checks (:data:`models.scenes.BOUNDS` and the rules between its keys) run
+and the scene's checks (:data:`models.scene.BOUNDS` and the rules between its keys) run
 on it, so the bounds live in one place. ``mass`` and ``load`` have no key of their own
 there: a mass is checked as the bead density it implies at the bead's radius, a load as
 the extra force it implies on the bead's weight. Which scene quantities a law takes
@@ -29,7 +29,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from .law import SCENE_KEYS, ContactLaw, prior_median
+from beadrod.models.law import SCENE_KEYS, ContactLaw, prior_median
 
 __all__ = ["nominal_parameters", "checked_parameters", "linear_state", "scene_names",
            "check_scene_values", "SCENE_PATHS"]
@@ -46,7 +46,7 @@ SCENE_PATHS: dict[str, tuple[str, ...]] = {
     "mass": ("materials", "bead", "density_kg_m3"),
     "load": ("preload", "extra_force_N"),
 }
-"""Scene quantity -> its key in the layout of :func:`models.scenes.scene_to_dict` (the
+"""Scene quantity -> its key in the layout of :func:`models.scene.scene_to_dict` (the
 bead's material is ``materials.bead`` there)."""
 _DERIVED = ("mass", "load")
 
@@ -92,7 +92,7 @@ def linear_state(law: ContactLaw, scene: Mapping[str, float],
     ``delta0_m``, ``K0_N_m``, ``f0_Hz``, ``Q`` (None without a loss channel) and ``kw``,
     the resolved keywords with ``delta0`` and ``omega0`` added (what :meth:`ContactLaw.shift`
     takes)."""
-    from .generic import stiffness
+    from beadrod.models.ladder.generic import stiffness
 
     kw = law.resolve(scene, theta)
     d0 = float(law.overlap(**kw))
@@ -113,10 +113,10 @@ def scene_names(law: ContactLaw) -> tuple[str, ...]:
 
 def check_scene_values(scene: Any, values: Mapping[str, float]) -> None:
     """Check scene quantities set by hand (names of :data:`SCENE_PATHS`) by the rules of
-    ``scene.toml``, all of them applied to ``scene`` (a :class:`models.scenes.Scene`);
-    models.scenes.SceneError (a ValueError: the scene's message, naming its key) if the
+    ``scene.toml``, all of them applied to ``scene`` (a :class:`models.scene.Scene`);
+    models.scene.SceneError (a ValueError: the scene's message, naming its key) if the
     scene they make is not one."""
-    from .scenes import scene_from_dict, scene_to_dict
+    from beadrod.models.scene import scene_from_dict, scene_to_dict
 
     if not values:
         return
@@ -144,7 +144,7 @@ def check_scene_values(scene: Any, values: Mapping[str, float]) -> None:
 def _bead_mass(radius: float, density: float) -> float:
     import jax
 
-    from .materials import bead_mass
+    from beadrod.models.scene.materials import bead_mass
 
     with jax.enable_x64(True):
         return float(bead_mass(radius, density))

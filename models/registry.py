@@ -14,9 +14,17 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
-from . import dmt, greenwood_williamson, hertz, jkr, maugis_dugdale, powerlaw, viscoelastic
-from .law import ContactLaw, RungUnavailable
-from .rungs import DEFAULT_RUNG, FIT_RUNGS, RUNGS, check_rung
+from beadrod.models.law import ContactLaw, RungUnavailable
+from beadrod.models.laws import (
+    dmt,
+    greenwood_williamson,
+    hertz,
+    jkr,
+    maugis_dugdale,
+    powerlaw,
+    viscoelastic,
+)
+from beadrod.models.rungs import DEFAULT_RUNG, FIT_RUNGS, RUNGS, check_rung
 
 __all__ = ["RUNGS", "FIT_RUNGS", "DEFAULT_RUNG", "laws", "law_names", "get_law", "register",
            "unregister", "tension_pair", "check_rung", "ContactLaw", "RungUnavailable"]

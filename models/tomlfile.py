@@ -1,6 +1,6 @@
 """Reading a TOML file the user wrote, with every failure as one line naming the file.
 
-Shared by the scene files (:mod:`models.scenes`) and the configuration files
+Shared by the scene files (:mod:`models.scene`) and the configuration files
 (``workflows.config``), so that both accept and refuse the same things: a UTF-8
 byte-order mark (Windows editors and spreadsheets write one; the measurement CSV
 accepts it too) is skipped; a folder, a missing file, bytes that are not UTF-8,

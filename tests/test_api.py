@@ -3,7 +3,7 @@ is cheap, the commands are thin layers over it, and the README's quick start run
 
 One comparison (hertz and the baseline, tiny counts, in this process) serves every test
 that needs fits; the commands' tests reuse its numbers through a stand-in for the
-fitting step (workflows.comparison.run_compare) instead of fitting again.
+fitting step (workflows.pipeline.run.run_compare) instead of fitting again.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def test_data_compare_fits(tmp_path):
     """compare() fits a Dataset as it is: read from its folder when that holds it,
     else (held in memory, or edited) written into the run's folder and read back."""
     from beadrod.data.process import default_path
-    from beadrod.workflows.comparison import dataset_folder
+    from beadrod.workflows.pipeline.run import dataset_folder
 
     ds = beadrod.load_dataset("paper_like")
     assert dataset_folder(ds, tmp_path / "a") == str(default_path())
@@ -190,8 +190,8 @@ def test_report_writes_the_commands_folder(res, tmp_path):
 def test_figures_are_drawn_not_written(res, monkeypatch):
     from matplotlib.figure import Figure
 
-    from beadrod.workflows import compare_figures
-    from beadrod.workflows.plots import plt
+    from beadrod.workflows.figures import comparison as compare_figures
+    from beadrod.workflows.figures.gallery import plt
 
     # the laws' nominal curves (every law of the default comparison, most of the cost) are
     # drawn by the same code for the command's report (tests/test_cli.py)
@@ -221,7 +221,7 @@ def test_fit_is_the_compare_of_one_law(res, monkeypatch):
 
 
 def test_keywords_are_the_flags():
-    from beadrod.workflows.cmd_compare import FLAG_KEYS
+    from beadrod.workflows.commands.compare import FLAG_KEYS
 
     assert set(api.KEYWORDS.values()) <= set(FLAG_KEYS.values())
     with pytest.raises(ValueError, match="sampling.warmup must be an integer >= 20"):
@@ -237,7 +237,7 @@ def test_cli_compare_runs_the_api(res, tmp_path, monkeypatch, capsys):
     runs the same function: with the fitting step standing in (the fixture's fits), the
     command writes the same comparison table."""
     from beadrod.data.process import default_path
-    from beadrod.workflows import comparison
+    from beadrod.workflows.pipeline import run as comparison
 
     seen = {}
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from beadrod.models.backbone import (
+from beadrod.models.ladder.backbone import (
     backbone_shift,
     lindstedt_coefficient,
     lindstedt_shift,
@@ -84,7 +84,7 @@ def test_backbone_small_amplitude_limit_is_lindstedt(n):
 
 @pytest.mark.slow
 def test_backbone_amplitude_root_is_solved():
-    from beadrod.models.backbone import _qmax_of_x
+    from beadrod.models.ladder.backbone import _qmax_of_x
     xs = jnp.array([0.05, 0.5, 0.95, 1.2, 2.5])
     qm = jax.jit(jax.vmap(lambda x: _qmax_of_x(x, jnp.asarray(1.5), 48)))(xs)
     a1 = jax.jit(jax.vmap(lambda q: powerlaw_orbit(q)[1]))(qm)
@@ -92,7 +92,7 @@ def test_backbone_amplitude_root_is_solved():
 
 
 def test_first_order_differs_from_exact_at_small_x():
-    shift = pytest.importorskip("beadrod.models.shift")
+    shift = pytest.importorskip("beadrod.models.ladder.first_order")
     # exact small-x coefficient -1/24 against the first-order average's -1/32:
     # the average misses the quadratic-force (mean-overlap) term, 25 % of the exact shift
     x = 0.05

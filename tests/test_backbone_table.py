@@ -1,6 +1,6 @@
 """Tabulated backbone against the exact energy-integral backbone and closed forms.
 
-References: models.backbone.backbone_shift (48 Gauss nodes; 128 within 0.05 of the
+References: models.ladder.backbone.backbone_shift (48 Gauss nodes; 128 within 0.05 of the
 contact-loss amplitude x_c, where 48 nodes are not accurate enough), the closed-form
 piecewise-linear oscillator (n = 1), and the Lindstedt coefficient by hand. The exact
 backbone is evaluated once per module, in two batches (one compile per node count).
@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from beadrod.models.backbone import backbone_shift, lindstedt_shift, powerlaw_orbit
-from beadrod.models.backbone_table import (
+from beadrod.models.ladder.backbone import backbone_shift, lindstedt_shift, powerlaw_orbit
+from beadrod.models.tables.powerlaw_backbone import (
     SPEC,
     X_MAX,
     backbone_shift_fast,
     contact_loss_amplitude,
     load_table,
 )
-from beadrod.models.surrogate import chebyshev_nodes, spline_coefficients, to_chebyshev
+from beadrod.models.tables.surrogate import chebyshev_nodes, spline_coefficients, to_chebyshev
 
 KINK_N = np.array([1.25, 1.5, 2.0, 3.0])
 KINK_OFF = np.array([-1e-3, -1e-5, -1e-6, 1e-6, 1e-5, 1e-3])

@@ -1,21 +1,21 @@
-"""Smoke run of `beadrod bench physics` (workflows/bench_physics.py) with tiny counts."""
+"""Smoke run of `beadrod bench physics` (workflows/bench/physics.py) with tiny counts."""
 
 import csv
 
 import pytest
 
-from beadrod.workflows import bench_physics
+from beadrod.workflows.bench import physics
 
 
 @pytest.fixture
 def tiny(monkeypatch):
     sizes = dict(points=64, quad=3, ref=6, grad_ref=2, jax_scipy=0, clipped=3, repeats=2,
                  quad_rounds=1)
-    monkeypatch.setitem(bench_physics._SIZES, "quick", sizes)
+    monkeypatch.setitem(physics._SIZES, "quick", sizes)
 
 
 def test_bench_physics_writes_tables(tmp_path, tiny):
-    md = bench_physics.run(tmp_path, quick=True)
+    md = physics.run(tmp_path, quick=True)
     assert md == tmp_path / "bench_physics.md" and md.exists()
     text = md.read_text()
     assert "| method |" in text and "## Targets" in text

@@ -235,7 +235,7 @@ def test_rungs_writes_its_tables(tmp_path, capsys):
     assert (out / "first_order" / "idata" / "hertz.nc").is_file()
     assert main(["rungs", "--rungs", "backbone", "--out", str(tmp_path / "x")]) == 2
     assert "two or more distinct rungs" in capsys.readouterr().err
-    from beadrod.inference.numpyro_models import RUNGS
+    from beadrod.inference.model.numpyro_models import RUNGS
     from beadrod.workflows.config import RUNGS as CLI_RUNGS
 
     assert set(CLI_RUNGS) == set(RUNGS)  # the CLI's copy of the list
@@ -252,8 +252,8 @@ def test_rungs_default_laws_name_those_left_out():
     # every default law but the baseline is either fitted (a fast path at every rung asked
     # for) or listed with the reason: none is dropped without a word
     from beadrod.models.registry import get_law
-    from beadrod.workflows.pipeline import default_model_names
-    from beadrod.workflows.rungs import rung_laws
+    from beadrod.workflows.pipeline.fits import default_model_names
+    from beadrod.workflows.pipeline.rung_effects import rung_laws
 
     for rungs in (["first_order", "backbone"], ["first_order", "backbone", "paper_eq25"]):
         names, left = rung_laws(rungs)
@@ -274,7 +274,7 @@ def test_default_comparison_refuses_a_rung_its_laws_have_no_fast_path_at():
     # the rough sphere's first order is the generic quadrature (hours inside NUTS): the
     # default comparison at that rung is refused, naming the law, not run for hours
     from beadrod.models.registry import get_law
-    from beadrod.workflows.pipeline import comparison_specs, default_model_names
+    from beadrod.workflows.pipeline.fits import comparison_specs, default_model_names
 
     slow = [n for n in default_model_names() if n != "baseline"
             and "first_order" not in get_law(n).shifts]
@@ -290,8 +290,8 @@ def test_inference_benchmark_covers_every_law_with_a_fast_backbone():
     """`bench inference` measures the default comparison's laws and the built-in laws left
     out of it that have a fast backbone (their speed is why they are out), baseline last."""
     from beadrod.models.registry import laws
-    from beadrod.workflows.bench_inference import _bench_names
-    from beadrod.workflows.pipeline import default_model_names
+    from beadrod.workflows.bench.inference import _bench_names
+    from beadrod.workflows.pipeline.fits import default_model_names
 
     names = _bench_names(default_model_names())
     fast = {law.name for law in laws() if law.source == "built-in"

@@ -24,7 +24,7 @@ def test_laws_lists_the_file(capsys):
     assert row["source"].endswith("hertz_scratch.py")
     assert [p["name"] for p in row["params"]] == ["young"]
     assert row["params"][0]["prior"] == "Uniform(low=1.5e+11, high=2.5e+11) Pa"
-    # every rung of the ladder (models.generic, models.generic_dynamics serve them)
+    # every rung of the ladder (models.ladder.generic, models.ladder.generic_dynamics serve them)
     assert {"series", "first_order", "backbone", "harmonic_balance",
             "time_integration"} <= set(row["rungs"])
     assert any(r["name"] == "hertz" and r["source"] == "built-in" for r in rows)
@@ -87,7 +87,7 @@ def test_rungs_fits_the_file_law_by_default():
     # a law file's law has no fast first order, yet `rungs --law-file` fits it: the file
     # asked for it (built-in laws without a fast path are left out, with the reason)
     from beadrod.workflows import lawfiles
-    from beadrod.workflows.rungs import rung_laws
+    from beadrod.workflows.pipeline.rung_effects import rung_laws
 
     lawfiles.load([LAW_FILE])
     names, left = rung_laws(["first_order", "backbone"])

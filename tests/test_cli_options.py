@@ -59,10 +59,10 @@ def test_shift_holds_scene_quantities_to_the_scenes_bounds(capsys, law, param, m
 
 def test_every_scene_quantity_is_checked_by_the_scenes_own_rules():
     """One place: each scene quantity goes into the scene's layout and the scene's checks
-    run on it, so a value past its key's bounds (models.scenes.BOUNDS) is refused with
+    run on it, so a value past its key's bounds (models.scene.BOUNDS) is refused with
     that bound's reason, and a value inside passes."""
     from beadrod.models.nominal import SCENE_PATHS, check_scene_values
-    from beadrod.models.scenes import BOUNDS, builtin_scene
+    from beadrod.models.scene import BOUNDS, builtin_scene
 
     scene = builtin_scene("paper")
     for name, path in SCENE_PATHS.items():
@@ -224,9 +224,9 @@ def test_a_path_that_is_not_utf8_is_refused():
 def test_every_prior_is_described_in_words():
     import numpyro.distributions as dist
 
-    from beadrod.inference.priors import PRIORS, prior
+    from beadrod.inference.model.priors import PRIORS, prior
     from beadrod.models.registry import laws
-    from beadrod.workflows.report_params import prior_text
+    from beadrod.workflows.report.params import prior_text
 
     texts = {name: prior_text(name, d) for name, d in PRIORS.items()}
     texts |= {p.name: prior_text(p.name, prior(p.name)) for law in laws() for p in law.params}

@@ -115,7 +115,7 @@ BAD_CONFIGS = [
 @pytest.mark.parametrize("text,message", BAD_CONFIGS)
 def test_bad_config_is_one_line_before_anything_runs(tmp_path, capsys, monkeypatch, text,
                                                     message):
-    import beadrod.workflows.comparison as comparison
+    import beadrod.workflows.pipeline.run as comparison
 
     monkeypatch.setattr(comparison, "run_compare",
                         lambda *a, **k: pytest.fail("a bad config was accepted"))
@@ -137,8 +137,8 @@ def test_bad_sampling_flags_are_refused(tmp_path, capsys, flags, message):
 
 
 def test_unknown_law_refused_before_the_data_are_loaded(tmp_path, capsys, monkeypatch):
-    import beadrod.workflows.comparison as comparison
-    import beadrod.workflows.pipeline as pipeline
+    import beadrod.workflows.pipeline.fits as pipeline
+    import beadrod.workflows.pipeline.run as comparison
     def no_data(cfg):
         raise AssertionError("the data were loaded before the law names were checked")
 
@@ -242,9 +242,9 @@ def test_shift_past_a_tables_upper_end_is_hertz_not_the_held_value(capsys, law, 
     is Hertz's to ~1e-7 here, but the value held at the table's end stood 2e-4 to 3e-4
     from Hertz's backbone (it printed -0.16361 for JKR's -0.16343 at x = 1.5; sigma = 0
     raised ZeroDivisionError). The fast path now carries the departure on as the law
-    approaches Hertz's (HERTZ_DECAY); checked against Hertz's backbone by models.backbone
+    approaches Hertz's (HERTZ_DECAY); checked against Hertz's backbone by models.ladder.backbone
     (F ~ delta^(3/2), its own quadrature)."""
-    from beadrod.models.backbone import backbone_shift
+    from beadrod.models.ladder.backbone import backbone_shift
 
     x = [1.5]
     assert main(["shift", "--law", law, "--method", "backbone", "--x", *map(str, x),
@@ -272,10 +272,10 @@ def test_a_scene_without_adhesion_is_described_not_refused(tmp_path, capsys):
     still refused."""
     import jax
 
-    from beadrod.models.scenes import load_scene
-    from beadrod.workflows.compare_figures import theory_curves
+    from beadrod.models.scene import load_scene
+    from beadrod.workflows.figures.comparison import theory_curves
 
-    text = Path("models/scenes/paper.toml").read_text()
+    text = Path("models/scene/presets/paper.toml").read_text()
     toml = tmp_path / "smooth.toml"
     toml.write_text(re.sub(r"(?m)^surface_energy_J_m2\s*=.*$", "surface_energy_J_m2 = 0.0",
                            text))
@@ -344,30 +344,39 @@ def test_quiet_shows_no_progress(tmp_path):
 
 
 def _workflows_imports() -> dict[str, set[str]]:
+    """module -> the workflows modules it imports (a package's name where a name taken
+    from it is not a module of its own)."""
+    root = ROOT / "workflows"
+
+    def module(dotted: str) -> str:
+        parts = dotted.split(".")[1:]
+        while parts and not ((root.joinpath(*parts).with_suffix(".py")).is_file()
+                             or (root.joinpath(*parts) / "__init__.py").is_file()):
+            parts.pop()
+        return ".".join(["workflows", *parts])
+
     graph = {}
-    for path in (ROOT / "workflows").glob("*.py"):
+    for path in root.rglob("*.py"):
+        rel = path.relative_to(ROOT).with_suffix("").parts
+        name = ".".join(rel[:-1] if rel[-1] == "__init__" else rel)
         deps = set()
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
                 mod = (node.module or "").removeprefix("beadrod.")
-                if node.level == 1:
-                    names = [mod] if mod else [a.name for a in node.names]
-                    deps |= {f"workflows.{n.split('.')[0]}" for n in names}
-                elif mod.startswith("workflows."):
-                    deps.add(".".join(mod.split(".")[:2]))
+                if mod.startswith("workflows"):
+                    deps |= {module(f"{mod}.{a.name}") for a in node.names}
             elif isinstance(node, ast.Import):
-                names = [a.name.removeprefix("beadrod.") for a in node.names]
-                deps |= {".".join(n.split(".")[:2]) for n in names
-                         if n.startswith("workflows.")}
-        graph[f"workflows.{path.stem}"] = deps - {f"workflows.{path.stem}"}
+                deps |= {module(a.name.removeprefix("beadrod.")) for a in node.names
+                         if a.name.removeprefix("beadrod.").startswith("workflows.")}
+        graph[name] = deps - {name, "workflows"}
     return graph
 
 
 def test_parallel_runs_what_it_is_handed_and_workflows_has_no_cycle():
     g = _workflows_imports()
-    assert g["workflows.parallel"] <= {"workflows.runtime"}
-    for mod in ("workflows.cli", "workflows.parallel"):
-        assert "workflows.cmd_compare" not in g[mod] and "workflows.pipeline" not in g[mod]
+    assert g["workflows.pipeline.parallel"] <= {"workflows.runtime"}
+    for mod in ("workflows.cli", "workflows.pipeline.parallel"):
+        assert "workflows.commands.compare" not in g[mod] and "workflows.pipeline.fits" not in g[mod]
     state: dict[str, int] = {}
 
     def visit(m: str, path: tuple[str, ...]) -> None:
@@ -401,7 +410,7 @@ def test_no_library_noise_and_a_failed_run_logs_its_error(tmp_path):
 
 
 def _gate_always_fails(monkeypatch):
-    from beadrod.inference import diagnostics
+    from beadrod.inference.sampling import diagnostics
 
     orig = diagnostics.check
 
@@ -412,7 +421,7 @@ def _gate_always_fails(monkeypatch):
 
 
 def _bridge_fails_for(monkeypatch, law: str):
-    from beadrod.inference import bridge
+    from beadrod.inference.evidence import bridge
 
     orig = bridge.bridge_sampling_log_z
 
@@ -493,7 +502,7 @@ def runs(tmp_path_factory):
                             "--allow-failed"])
     stages["force"]["files"] = sorted(str(p.relative_to(out)) for p in out.rglob("*")
                                       if p.is_file())
-    from beadrod.workflows.idata_io import load_idata
+    from beadrod.workflows.pipeline.idata_io import load_idata
 
     idata = load_idata(out / "idata" / "hertz.nc")
     stages["force"]["groups"] = {g: sorted(getattr(idata, g).data_vars) for g in
@@ -564,9 +573,9 @@ def test_cache_key_follows_the_model_inputs():
     option that changes what enters the model."""
     import copy
 
-    from beadrod.inference.likelihood import model_inputs
-    from beadrod.workflows.comparison import model_specs
-    from beadrod.workflows.pipeline import _cache_key, load_data
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.workflows.pipeline.fits import _cache_key, load_data
+    from beadrod.workflows.pipeline.run import model_specs
 
     def key(cfg, spec=None):
         ds = load_data(cfg)
@@ -591,7 +600,7 @@ def test_cache_key_follows_the_model_inputs():
 def test_code_digest_follows_the_code(tmp_path):
     """A fit made by other code (a changed law file, a changed package file) has another
     key: the digest covers the packages and the law's own file."""
-    from beadrod.workflows.pipeline import code_digest
+    from beadrod.workflows.pipeline.fits import code_digest
 
     law_file = tmp_path / "law.py"
     law_file.write_text("NAME = 'a'\n")
@@ -619,11 +628,11 @@ def test_a_value_is_checked_by_the_laws_own_parameter(tmp_path):
     """What a parameter's values may be is the law's parameter's (models.law.Param: its
     domain and its quantity's physical bounds), not a list by name: a file law's own
     exponent n is not held to the power law's (1, 3], its E is held to E's bounds."""
-    from beadrod.inference.likelihood import scene_quantities
+    from beadrod.inference.model.likelihood import scene_quantities
     from beadrod.models.lawfile import load_law_file
     from beadrod.models.registry import get_law
-    from beadrod.models.scenes import builtin_scene
-    from beadrod.workflows.cmd_shift import check_param
+    from beadrod.models.scene import builtin_scene
+    from beadrod.workflows.commands.shift import check_param
 
     power = get_law("powerlaw")
     with pytest.raises(ValueError, match=r"n = 1: the power-law exponent is defined for n "

@@ -1,4 +1,4 @@
-"""The evidence ranking and the LOO-PIT check of inference.compare."""
+"""The evidence ranking and the LOO-PIT check of inference.evidence.ranking."""
 
 import math
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from beadrod.inference.compare import log_bayes_factor, loo_pit_summary, rank_evidence
+from beadrod.inference.evidence.ranking import log_bayes_factor, loo_pit_summary, rank_evidence
 
 
 def _e(name, z, err, ok=True, baseline=False):

@@ -30,9 +30,9 @@ ROWS = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from beadrod.models import scenes
+    from beadrod.models import scene
 
-    return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
+    return dump_toml(scene.scene_to_dict(scene.builtin_scene("paper")))
 
 
 @pytest.fixture

@@ -34,9 +34,9 @@ CURVE_HEADER = HEADER + ",curve"
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from beadrod.models import scenes
+    from beadrod.models import scene
 
-    return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
+    return dump_toml(scene.scene_to_dict(scene.builtin_scene("paper")))
 
 
 def folder(tmp_path, scene_text, lines, name="ds"):
@@ -93,7 +93,7 @@ def test_writing_a_dataset_imports_no_workflows(tmp_path):
 
 def test_workflows_io_reexports_data_io():
     from beadrod.data import io
-    from beadrod.workflows import _io
+    from beadrod.data import io as _io
 
     for name in ("atomic_path", "write_text", "write_bytes", "write_json"):
         assert getattr(_io, name) is getattr(io, name)
@@ -349,12 +349,12 @@ def test_unused_drive_q_is_noted(tmp_path, scene_text):
 def test_validate_lists_notes_and_excluded_lines(tmp_path, scene_text, capsys):
     import argparse
 
-    from beadrod.workflows import cmd_validate
+    from beadrod.workflows.commands import validate
 
     lines = [HEADER, GOOD[0], set_cell(GOOD[1], "q_factor", "33.0"), *GOOD[2:]]
     lines += ["B,2,reference,up,0.01,2580.0,4.0e-10,30.0", "B,3,drive,up,0.8,2570.0,3.0e-8,"]
     parser = argparse.ArgumentParser()
-    cmd_validate.register(parser.add_subparsers())
+    validate.register(parser.add_subparsers())
     args = parser.parse_args(["validate", str(folder(tmp_path, scene_text, lines))])
     assert args.func(args) == 0
     out = capsys.readouterr().out

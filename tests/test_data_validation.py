@@ -21,9 +21,9 @@ GOOD = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from beadrod.models import scenes
+    from beadrod.models import scene
 
-    return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
+    return dump_toml(scene.scene_to_dict(scene.builtin_scene("paper")))
 
 
 def write(tmp_path, scene_text, rows, header=HEADER):
@@ -180,10 +180,10 @@ def test_missing_scene(tmp_path):
 
 
 def test_validate_command_reports_bad_data(tmp_path, scene_text):
-    from beadrod.workflows import cmd_validate
+    from beadrod.workflows.commands import validate
 
     parser = argparse.ArgumentParser()
-    cmd_validate.register(parser.add_subparsers())
+    validate.register(parser.add_subparsers())
     folder = write(tmp_path, scene_text, replace(2, "f_res_Hz", "2.7k"))
     args = parser.parse_args(["validate", str(folder)])
     with pytest.raises(DataError, match=r"measurements.csv, line 4, column 'f_res_Hz'"):

@@ -33,9 +33,9 @@ GOOD = [
 
 @pytest.fixture(scope="module")
 def scene_text():
-    from beadrod.models import scenes
+    from beadrod.models import scene
 
-    return dump_toml(scenes.scene_to_dict(scenes.builtin_scene("paper")))
+    return dump_toml(scene.scene_to_dict(scene.builtin_scene("paper")))
 
 
 def folder(tmp_path, scene_text, lines, name="ds"):
@@ -92,7 +92,7 @@ def test_dataset_without_a_q_column_loads_and_says_so(tmp_path, scene_text, caps
 
 
 def _tiny(q_ref):
-    from beadrod.models.scenes import builtin_scene
+    from beadrod.models.scene import builtin_scene
 
     return types.SimpleNamespace(
         f0=np.array([2650.0, 2700.0, 2680.0]), q_ref=np.asarray(q_ref, float),
@@ -112,8 +112,8 @@ def test_missing_q_is_masked_out_of_the_likelihood_term_by_term(law):
     from numpyro import handlers
     from numpyro.infer.util import log_density
 
-    from beadrod.inference.likelihood import model_inputs
-    from beadrod.inference.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.inference.model.numpyro_models import ModelSpec, build_model
 
     model = build_model(ModelSpec(law, fold=False))
     full = model_inputs(_tiny([30.0, 40.0, 50.0]))
@@ -140,8 +140,8 @@ def test_missing_q_is_masked_out_of_the_likelihood_term_by_term(law):
 
 
 def test_report_data_section_counts_protocols_without_q(tmp_path, scene_text):
-    from beadrod.workflows.compare_outputs import data_block
-    from beadrod.workflows.report import _data_blocks, _warning_blocks
+    from beadrod.workflows.pipeline.outputs import data_block
+    from beadrod.workflows.report.document import _data_blocks, _warning_blocks
 
     d = folder(tmp_path, scene_text, [HEADER, set_cell(GOOD[0], "q_factor", "nan"), *GOOD[1:]])
     block = data_block(process(load_dataset(d)))
@@ -264,7 +264,7 @@ def test_embedded_worlds_and_builtin_scenes_pass_the_unit_check():
     import pandas as pd
 
     from beadrod.data.scene_check import F0_TOLERANCE, check_scene_units, implied_f0_range
-    from beadrod.models import scenes
+    from beadrod.models import scene
 
     root = Path(__file__).resolve().parents[1] / "data"
     for world in ("paper_like", "hertz_dynamics"):
@@ -272,9 +272,9 @@ def test_embedded_worlds_and_builtin_scenes_pass_the_unit_check():
         ref = ds.table.loc[ds.table["kind"] == "reference", "f_res_Hz"]
         lo, hi = implied_f0_range(ds.scene)
         assert lo <= ref.median() <= hi  # inside the range itself, not just the band
-    for name in scenes.builtin_scene_names():
+    for name in scene.builtin_scene_names():
         # a resonance in the middle of the scene's own sweep band: what it was drawn for
-        sc = scenes.builtin_scene(name)
+        sc = scene.builtin_scene(name)
         mid = math.sqrt(sc.f_min * sc.f_max)
         table = pd.DataFrame({"kind": ["reference"], "f_res_Hz": [mid]})
         check_scene_units(sc, table, scene_file=Path(f"{name}.toml"), csv_name="m.csv")

@@ -4,9 +4,14 @@ import arviz as az
 import numpy as np
 import pytest
 
-from beadrod.inference.compare import DataHashMismatch, evidence_table, log_bayes_factor, loo_table
-from beadrod.inference.diagnostics import DiagnosticsFailed, check, loo_report
-from beadrod.inference.evidence import EvidenceResult
+from beadrod.inference.evidence.log_z import EvidenceResult
+from beadrod.inference.evidence.ranking import (
+    DataHashMismatch,
+    evidence_table,
+    log_bayes_factor,
+    loo_table,
+)
+from beadrod.inference.sampling.diagnostics import DiagnosticsFailed, check, loo_report
 
 
 def make_idata(shift=0.0, divergences=0, n_chains=4, n_draws=500, seed=0, data_hash="h1",

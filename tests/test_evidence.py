@@ -9,8 +9,8 @@ import numpyro.distributions as dist
 import pytest
 from scipy import integrate, stats
 
-from beadrod.inference.bridge import bridge_sampling_log_z
-from beadrod.inference.evidence import (
+from beadrod.inference.evidence.bridge import bridge_sampling_log_z
+from beadrod.inference.evidence.log_z import (
     EvidenceResult,
     combined_agreement,
     linear_gaussian_log_evidence,
@@ -88,8 +88,8 @@ def test_evidence_full_accuracy(analytic):
 
 
 def _contact_design():
-    from beadrod.inference.likelihood import design_inputs
-    from beadrod.models.scenes import builtin_scene
+    from beadrod.inference.model.likelihood import design_inputs
+    from beadrod.models.scene import builtin_scene
 
     return design_inputs(builtin_scene("paper"), n_protocols=4,
                          amplitudes=np.linspace(5e-9, 40e-9, 5))
@@ -98,8 +98,8 @@ def _contact_design():
 def test_evidence_ranks_the_generating_law_first():
     """Hertz data: Hertz beats the paper_eq25 viscoelastic law (whose Q-pinned eta puts a
     linear term into the shift that the data lack); Eq. 25 data: the reverse."""
-    from beadrod.inference.likelihood import simulate
-    from beadrod.inference.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.model.likelihood import simulate
+    from beadrod.inference.model.numpyro_models import ModelSpec, build_model
 
     des = _contact_design()
     hertz = build_model(ModelSpec("hertz"))

@@ -1,12 +1,12 @@
 """A NUTS run short of its ESS target goes on from where it stopped
-(inference.sample.run_nuts ``ess_target``, ``max_extensions``; the comparison's
+(inference.sampling.sample.run_nuts ``ess_target``, ``max_extensions``; the comparison's
 ``sampling.extensions``), on a toy posterior N(0, 1)."""
 
 import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
-from beadrod.inference.sample import run_nuts
+from beadrod.inference.sampling.sample import run_nuts
 
 # run_nuts labels its output by the data's protocols and sweeps: one of each
 ONE = {"f0": np.ones(1), "q_idx": np.zeros(0, int), "amplitude": np.ones(1),

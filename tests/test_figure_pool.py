@@ -1,4 +1,4 @@
-"""Figures written by worker processes (workflows.figure_pool) are the files one process
+"""Figures written by worker processes (workflows.figures.pool) are the files one process
 writes; a figure that does not pickle is written anyway; a warning of a write reaches the
 parent; a failed write names its figure."""
 
@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.ticker import FuncFormatter  # noqa: E402
 
-from beadrod.workflows.figure_pool import FigureWriter  # noqa: E402
+from beadrod.workflows.figures.pool import FigureWriter  # noqa: E402
 
 
 def _figure(label: str = "Delta f/f0 [-]"):
@@ -29,10 +29,10 @@ def _figure(label: str = "Delta f/f0 [-]"):
 
 
 def test_pool_writes_the_same_pixels_as_one_process(tmp_path, monkeypatch):
-    from beadrod.workflows import figure_pool
+    from beadrod.workflows.figures import pool
 
     unpickled = []
-    monkeypatch.setattr(figure_pool.log, "debug", lambda *a: unpickled.append(a[1]))
+    monkeypatch.setattr(pool.log, "debug", lambda *a: unpickled.append(a[1]))
     with FigureWriter(1) as w:
         w.save(_figure(), tmp_path / "one")
     odd = _figure()   # an artist holding a lambda does not pickle: written here instead

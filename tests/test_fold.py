@@ -1,4 +1,4 @@
-"""The fold of a sweep curve in its one shape parameter (inference.fold) against the exact
+"""The fold of a sweep curve in its one shape parameter (inference.speed.fold) against the exact
 curve it stands in for, its refusals, and its fallback where a cubic would miss."""
 
 from __future__ import annotations
@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from numpyro.infer.util import log_density
 
-from beadrod.inference import fold as F
-from beadrod.inference.likelihood import model_inputs
-from beadrod.inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
-from beadrod.inference.priors import law_prior
-from beadrod.inference.residual_fold import ResidualFold
+from beadrod.inference.model.likelihood import model_inputs
+from beadrod.inference.model.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
+from beadrod.inference.model.priors import law_prior
+from beadrod.inference.speed import fold as F
+from beadrod.inference.speed.residual_fold import ResidualFold
 from beadrod.models.registry import get_law, law_names
 from beadrod.workflows.config import DEFAULTS
-from beadrod.workflows.pipeline import load_data
+from beadrod.workflows.pipeline.fits import load_data
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +72,7 @@ def test_fold_matches_the_exact_quantities(name, inputs):
     # outside the folded range the exact values (to rounding: XLA may fuse the two
     # evaluations differently)
     assert np.all(miss[-2:] <= 1e-12)
-    # its derivative (a rule of its own, inference.fold._evaluate) is the exact one's to
+    # its derivative (a rule of its own, inference.speed.fold._evaluate) is the exact one's to
     # the cubics' accuracy, in forward and reverse mode alike
     zs = jnp.asarray(z[:20])
 
@@ -156,9 +156,9 @@ def test_a_kink_is_refined_or_left_to_the_exact_curve():
 def test_known_overlap_map_is_used_only_at_its_f0():
     """MeasuredF0 with the map precomputed at the observed f0 (the fold's values) gives
     that density there and evaluates the map at any other value."""
-    from beadrod.inference.likelihood import scene_quantities
-    from beadrod.inference.overlap import MeasuredF0, log_overlap_and_slope
-    from beadrod.models.scenes import builtin_scene
+    from beadrod.inference.model.likelihood import scene_quantities
+    from beadrod.inference.model.overlap import MeasuredF0, log_overlap_and_slope
+    from beadrod.models.scene import builtin_scene
 
     law = get_law("jkr")
     kw = law.resolve(scene_quantities(builtin_scene("paper")), {"young": 200e9, "gamma": 0.7})

@@ -8,7 +8,7 @@ columns deleted or added, rows deleted or repeated, a byte-order mark, raw curve
 of absurd amplitudes, a ``truth.json`` of any shape. Each case must either load (and
 then process into the arrays the fits take, and print as ``beadrod validate`` prints it)
 or raise the project's one-line error (:class:`data.DataError`,
-:class:`models.scenes.SceneError`): never another exception, never a message of several
+:class:`models.scene.SceneError`): never another exception, never a message of several
 lines.
 """
 
@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 from beadrod.data.load import load_dataset
 from beadrod.data.process import process
 from beadrod.data.schema import DataError
-from beadrod.models.scenes import SceneError, load_scene
+from beadrod.models.scene import SceneError, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLD = ROOT / "data" / "paper_like"
@@ -146,8 +146,8 @@ def _one_line(exc: Exception) -> None:
 
 def _load_all(folder: Path) -> None:
     """Load, process, summarise and build the model inputs, or refuse in one line."""
-    from beadrod.inference.likelihood import model_inputs
-    from beadrod.workflows.cmd_validate import summary
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.workflows.commands.validate import summary
 
     try:
         ds = load_dataset(folder)

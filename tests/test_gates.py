@@ -2,7 +2,7 @@
 and on fresh synthetic worlds of seeds the project was never tuned on, at the default
 sampling settings (workflows.config.DEFAULTS), every law at the comparison's default rung.
 
-The gate is the one ``beadrod compare`` applies (inference.diagnostics.check: R-hat,
+The gate is the one ``beadrod compare`` applies (inference.sampling.diagnostics.check: R-hat,
 bulk and tail ESS, divergences, E-BFMI), after the same extensions of a run short of ESS
 (``sampling.extensions``). Slow: one full-length NUTS run per model and
 world (about 15 min on 2 cores for all of them).
@@ -38,7 +38,7 @@ def datasets(tmp_path_factory):
 
 
 def _model_names():
-    from beadrod.workflows.pipeline import default_model_names
+    from beadrod.workflows.pipeline.fits import default_model_names
 
     return default_model_names()
 
@@ -47,13 +47,13 @@ def _model_names():
 @pytest.mark.parametrize("world,seed", _worlds(),
                          ids=[f"{w}-{'embedded' if s is None else s}" for w, s in _worlds()])
 def test_every_default_model_passes_its_gate(datasets, world, seed):
-    from beadrod.inference import diagnostics
-    from beadrod.inference.likelihood import model_inputs
-    from beadrod.inference.numpyro_models import build_model
-    from beadrod.inference.sample import run_nuts
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.inference.model.numpyro_models import build_model
+    from beadrod.inference.sampling import diagnostics
+    from beadrod.inference.sampling.sample import run_nuts
     from beadrod.models.registry import DEFAULT_RUNG
     from beadrod.workflows.config import DEFAULTS
-    from beadrod.workflows.pipeline import comparison_specs
+    from beadrod.workflows.pipeline.fits import comparison_specs
 
     ds = datasets(world, seed)
     inputs = model_inputs(ds)

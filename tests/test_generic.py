@@ -1,12 +1,14 @@
-"""The generic numerics (models.generic: any force law) against the fast paths: closed
+"""The generic numerics (models.ladder.generic: any force law) against the fast paths: closed
 forms to 1e-10, the power-law backbone quadrature to 1e-10, the JKR first-order table."""
 
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import backbone, generic, jkr, registry, shift
+from beadrod.models import registry
+from beadrod.models.ladder import backbone, first_order, generic
 from beadrod.models.law import RungUnavailable
+from beadrod.models.laws import jkr
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
          "mass": 0.01613, "gravity": 9.81}
@@ -31,13 +33,13 @@ def test_static_overlap_and_frequency_map_against_closed_forms():
 def test_first_order_powerlaw_closed_form(n):
     law, kw, d0 = _kw("powerlaw", n=n, delta0_ref_log=np.log(55e-9))
     got = generic.first_order_shift(law, X, delta0=d0, **kw)
-    np.testing.assert_allclose(got, shift.first_order_powerlaw(X, n), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(got, first_order.first_order_powerlaw(X, n), rtol=0, atol=1e-10)
 
 
 def test_first_order_hertz_and_jkr():
     law, kw, d0 = _kw("hertz", young=200e9)
     np.testing.assert_allclose(generic.first_order_shift(law, X, delta0=d0, **kw),
-                               shift.first_order_hertz(X), atol=1e-10)
+                               first_order.first_order_hertz(X), atol=1e-10)
     law, kw, d0 = _kw("jkr", young=200e9, gamma=0.7)
     ref = jkr.shift_first_order(X, load=kw["load"], e_star=kw["e_star"], radius=kw["radius"],
                                 gamma=0.7)

@@ -1,6 +1,6 @@
-"""The dynamic rungs for any law (models.generic_dynamics: series, harmonic balance, time
-integration from the law's force) against the power-law ladder (models.ladder, whose
-oscillator is models.oscillator.PowerLaw's closed force), the closed-form Lindstedt
+"""The dynamic rungs for any law (models.ladder.generic_dynamics: series, harmonic balance, time
+integration from the law's force) against the power-law ladder (models.ladder.powerlaw_ladder, whose
+oscillator is models.ladder.oscillator.PowerLaw's closed force), the closed-form Lindstedt
 coefficient, and the backbone limit of a lightly damped adhesive (JKR) oscillator."""
 
 import math
@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from beadrod.models import generic_dynamics as dyn
-from beadrod.models import hertz, ladder, powerlaw, viscoelastic
+from beadrod.models.ladder import generic_dynamics, powerlaw_ladder
+from beadrod.models.laws import hertz, powerlaw, viscoelastic
 from beadrod.models.rungs import LADDER, RUNGS
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
@@ -32,7 +32,7 @@ def test_series_is_the_closed_form_lindstedt_coefficient(n):
     got = np.asarray(law.shift(x, rung="series", delta0=d0, **kw))
     # c = 3 a3/8 - 5 a2^2/12 with a2 = (n-1)/2, a3 = (n-1)(n-2)/6 (Nayfeh & Mook 4.1.1)
     np.testing.assert_allclose(got, -(n - 1) * (2 * n + 1) / 48 * x**2, rtol=1e-12, atol=0)
-    np.testing.assert_allclose(got, ladder.rung1_series(x, n), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(got, powerlaw_ladder.rung1_series(x, n), rtol=1e-12, atol=0)
 
 
 @pytest.mark.slow  # each law compiles its peak solve, 20-50 s on two shared cores
@@ -43,7 +43,7 @@ def test_harmonic_balance_matches_the_power_law_ladder(name, n, x):
     law, kw, d0 = (hertz.LAW, *_kw(hertz.LAW, young=200e9)) if name == "hertz" else _power(n)
     x = np.asarray(x)
     got = law.shift(x, rung="harmonic_balance", delta0=d0, q_factor=40.0, **kw)
-    want = ladder.rung4_hbm(x, n, q_factor=40.0, harmonics=3)
+    want = powerlaw_ladder.rung4_hbm(x, n, q_factor=40.0, harmonics=3)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-10)
     assert np.all(np.diff(got) < 0)          # softening, growing with x
 
@@ -53,7 +53,7 @@ def test_harmonic_balance_matches_the_power_law_ladder(name, n, x):
 def test_time_integration_matches_the_power_law_ladder(n):
     law, kw, d0 = (hertz.LAW, *_kw(hertz.LAW, young=200e9)) if n == 1.5 else _power(n)
     got = law.shift(np.array([0.5]), rung="time_integration", delta0=d0, q_factor=20.0, **kw)
-    want = ladder.rung5_timeint(np.array([0.5]), n, q_factor=20.0)
+    want = powerlaw_ladder.rung5_timeint(np.array([0.5]), n, q_factor=20.0)
     # same experiment, same integrator: only the backbone-slope correction's source (the
     # law's tabulated backbone here, the exact quadrature there) differs
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-7)
@@ -65,23 +65,23 @@ def test_time_integration_matches_the_power_law_ladder(n):
 @pytest.mark.slow
 def test_viscoelastic_q_and_damping_are_the_kuwabara_kono_ones():
     # the law's own linear Q sets zeta, and the stiffness-proportional dashpot is KK's:
-    # the generic HBM equals the peak of models.oscillator.Viscoelastic(A omega0 = 1/Q)
-    from beadrod.models.oscillator import PowerLaw, Viscoelastic
+    # the generic HBM equals the peak of models.ladder.oscillator.Viscoelastic(A omega0 = 1/Q)
+    from beadrod.models.ladder.oscillator import PowerLaw, Viscoelastic
 
     law = viscoelastic.LAW
     kw, d0 = _kw(law, young=200e9, eta=2e5)
     kw["omega0"] = 2 * math.pi * 2700.0
-    q = dyn.quality_factor(law, delta0=d0, **kw)
+    q = generic_dynamics.quality_factor(law, delta0=d0, **kw)
     assert q == pytest.approx(float(law.quality_factor(**kw)), rel=1e-12)
     got = law.shift(np.array([0.6]), rung="harmonic_balance", delta0=d0, **kw)
-    om, _, _ = ladder.hbm_peak(Viscoelastic(a_omega0=1.0 / q), PowerLaw(n=1.5), 0.6,
+    om, _, _ = powerlaw_ladder.hbm_peak(Viscoelastic(a_omega0=1.0 / q), PowerLaw(n=1.5), 0.6,
                                omega_guess=0.98, harmonics=3)
     assert float(got[0]) == pytest.approx(om - 1.0, abs=1e-10)
 
 
 @pytest.mark.slow
 def test_jkr_peak_tends_to_its_backbone_as_one_over_q_squared():
-    from beadrod.models import jkr
+    from beadrod.models.laws import jkr
 
     law = jkr.LAW
     kw, d0 = _kw(law, young=200e9, gamma=0.7)
@@ -125,9 +125,9 @@ def test_every_builtin_law_lists_every_ladder_rung():
 
 def test_a_law_without_loss_refuses_a_useless_q():
     law, kw, d0 = hertz.LAW, *_kw(hertz.LAW, young=200e9)
-    assert dyn.quality_factor(law, delta0=d0, **kw) == dyn.DEFAULT_Q
+    assert generic_dynamics.quality_factor(law, delta0=d0, **kw) == generic_dynamics.DEFAULT_Q
     with pytest.raises(ValueError, match="Q > 2"):
-        dyn.quality_factor(law, delta0=d0, q_factor=1.0, **kw)
+        generic_dynamics.quality_factor(law, delta0=d0, q_factor=1.0, **kw)
 
 
 # ------------------------------------------------------------------ beadrod shift --method
@@ -137,7 +137,7 @@ def test_shift_command_takes_every_rung_the_law_has(capsys):
     import json
 
     from beadrod.workflows.cli import main
-    from beadrod.workflows.cmd_shift import METHODS
+    from beadrod.workflows.commands.shift import METHODS
 
     assert set(METHODS) == set(RUNGS)
     assert main(["shift", "--law", "hertz", "--x", "0.5", "1.5", "--method", "series",
@@ -160,5 +160,5 @@ def test_shift_command_harmonic_balance_is_the_ladder_peak(capsys):
     assert main(["shift", "--law", "hertz", "--x", "0.4", "--method", "harmonic_balance",
                  "--json"]) == 0
     t = json.loads(capsys.readouterr().out)
-    want = ladder.rung4_hbm(np.array([0.4]), 1.5, q_factor=dyn.DEFAULT_Q, harmonics=3)
+    want = powerlaw_ladder.rung4_hbm(np.array([0.4]), 1.5, q_factor=generic_dynamics.DEFAULT_Q, harmonics=3)
     assert t["delta_f_over_f0"][0] == pytest.approx(float(want[0]), abs=1e-10)

@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import hertz, powerlaw
-from beadrod.models.materials import (
+from beadrod.models.laws import hertz, powerlaw
+from beadrod.models.scene.materials import (
     G_STANDARD,
     bead_mass,
     bead_weight,
@@ -75,7 +75,7 @@ def test_powerlaw_preload_frequency_independent_of_c(n):
         d0 = powerlaw.static_overlap(weight, coeff=coeff, n=n)
         k0 = powerlaw.stiffness(d0, coeff=coeff, n=n)
         omega2 = float(k0 / mass)
-        # omega0^2 = n g / delta0 whatever C is (models.powerlaw).
+        # omega0^2 = n g / delta0 whatever C is (models.laws.powerlaw).
         assert omega2 == pytest.approx(n * G_STANDARD / float(d0), rel=1e-12)
 
 

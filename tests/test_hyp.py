@@ -1,4 +1,4 @@
-"""models/_hyp.py against independent references: mpmath 2F1, mpmath/scipy quadrature."""
+"""models/ladder/hypergeometric.py against independent references: mpmath 2F1, mpmath/scipy quadrature."""
 
 import jax
 import jax.numpy as jnp
@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from beadrod.models._hyp import (
+from beadrod.models.ladder.hypergeometric import (
     NEG_INF_GRAD,
     dmean_power_dx_at_one,
     mean_power,

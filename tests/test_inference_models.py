@@ -12,18 +12,23 @@ from numpyro.infer import Predictive
 from numpyro.infer.util import potential_energy, unconstrain_fn
 from scipy import integrate
 
-from beadrod.inference.likelihood import design_inputs, model_inputs, simulate, without_observations
-from beadrod.inference.numpyro_models import (
+from beadrod.inference.model.likelihood import (
+    design_inputs,
+    model_inputs,
+    simulate,
+    without_observations,
+)
+from beadrod.inference.model.numpyro_models import (
     ForwardModelUnavailable,
     MeasuredF0,
     ModelSpec,
     build_model,
     curve_draws,
 )
-from beadrod.inference.sample import run_nuts
-from beadrod.models import hertz, materials
-from beadrod.models.scenes import builtin_scene
-from beadrod.workflows.idata_io import load_idata, save_idata
+from beadrod.inference.sampling.sample import run_nuts
+from beadrod.models.laws import hertz
+from beadrod.models.scene import builtin_scene, materials
+from beadrod.workflows.pipeline.idata_io import load_idata, save_idata
 
 R = 7.938e-3  # the paper's bead radius [m]
 SCENE = builtin_scene("paper")  # mass, load, radius, bead and rod materials
@@ -106,7 +111,7 @@ def test_spec_validation_and_rung_refusal():
 
 @pytest.mark.slow
 def test_backbone_rung_prior_predictive():
-    """The exact rung is wired when models.backbone is finite and differentiable
+    """The exact rung is wired when models.ladder.backbone is finite and differentiable
     (slow: the backbone quadrature compiles for about a minute)."""
     model = build_model("powerlaw", rung="backbone", n_protocols=4)
     prior = Predictive(model, num_samples=16)(jax.random.PRNGKey(1), design())
@@ -187,7 +192,7 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     the scaled site, and refuses a truth it would otherwise ignore."""
     from scipy import stats
 
-    from beadrod.models import maugis_dugdale_static as static
+    from beadrod.models.laws.maugis_dugdale import static
     from beadrod.models.registry import get_law
 
     law = get_law("maugis_dugdale")
@@ -222,7 +227,7 @@ def test_a_sampler_scale_keeps_the_prior_and_moves_the_sample_site():
     # the scaled site is described in an InferenceData (no unit: gamma's times a scale)
     import arviz as az
 
-    from beadrod.inference.sample import describe
+    from beadrod.inference.sampling.sample import describe
 
     idata = describe(az.from_dict(posterior={"gamma_scaled": np.ones((1, 3)),
                                              "gamma": np.ones((1, 3))}))
@@ -236,7 +241,7 @@ SCENE_KW = {"load": SCENE.load, "mass": SCENE.mass, "radius": R}
 
 def _law_kw(law, shape):
     """Resolved keywords of ``law`` with its shape parameter (gamma, n) set to ``shape``."""
-    from beadrod.inference.likelihood import scene_quantities
+    from beadrod.inference.model.likelihood import scene_quantities
     from beadrod.models.registry import get_law
 
     theta = {"jkr": {"young": 200e9, "gamma": shape}, "powerlaw": {"n": shape,
@@ -261,7 +266,7 @@ def test_f0_density_integrates_to_one(law, shape):
     assert abs(bare - 1.0) > 100.0
     # sampling inverts the map: draws of f0 give log delta0 ~ Normal(log_ref, 0.12)
     f = d.sample(jax.random.PRNGKey(0), (20000,))
-    from beadrod.inference.numpyro_models import log_overlap
+    from beadrod.inference.model.numpyro_models import log_overlap
     z = np.asarray(log_overlap(law, f, _law_kw(law, shape)))
     assert z.mean() == pytest.approx(log_ref, abs=0.005) and z.std() == pytest.approx(0.12, rel=0.03)
 
@@ -389,7 +394,7 @@ def test_idata_netcdf_keeps_dims_coords_and_units(named_fit, tmp_path):
 
 
 def test_idata_default_coords_and_bad_protocol_ids():
-    from beadrod.inference.sample import idata_coords
+    from beadrod.inference.sampling.sample import idata_coords
 
     des = design_inputs(SCENE, n_protocols=3, amplitudes=AMPS, q_every=2)
     c = idata_coords(des)
@@ -460,8 +465,8 @@ def test_baseline_passes_its_gate_on_the_embedded_worlds(world):
     x 500 warmup + 1000 draws) the baseline passes the full gate on both embedded worlds
     (before its reparameterisation: R-hat 1.07, bulk ESS 50 on hertz_dynamics)."""
     from beadrod import data as bd
-    from beadrod.inference import diagnostics
-    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.inference.sampling import diagnostics
     from beadrod.workflows.config import DEFAULTS
 
     s = DEFAULTS["sampling"]

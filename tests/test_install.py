@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("models", "data", "inference", "workflows")
 # what a notebook next to a user's own data/ and models/ folders runs
 PROBE = ("import beadrod.data, beadrod.models, beadrod.workflows.cli as cli; "
-         "from beadrod.data import load_dataset; from beadrod.models import hertz; "
+         "from beadrod.data import load_dataset; from beadrod.models.laws import hertz; "
          "import beadrod; print(beadrod.__file__); print(beadrod.data.__file__)")
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import integrate, optimize
 
-from beadrod.models import dmt, jkr
+from beadrod.models.laws import dmt, jkr
 
 R_BEAD, RHO, NU, G, GAMMA = 7.938e-3, 7700.0, 0.27, 9.80665, 0.7
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * RHO

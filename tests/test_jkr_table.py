@@ -1,4 +1,4 @@
-"""The tabulated JKR first-order shift (models/jkr_table.py) against the quadrature it
+"""The tabulated JKR first-order shift (models/laws/jkr/table.py) against the quadrature it
 replaces, its E*-invariance (the reason a (x, F0/Fc) table is exact in structure), its
 Hertz limit (independent closed form) and finite gradients where NUTS goes."""
 
@@ -7,8 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import jkr, jkr_table
-from beadrod.models.shift import first_order_hertz
+from beadrod.models.ladder.first_order import first_order_hertz
+from beadrod.models.laws import jkr
+from beadrod.models.laws.jkr import table
 
 R = 0.007938
 
@@ -32,7 +33,7 @@ def test_table_matches_quadrature_at_random_points():
     x = np.concatenate([rng.uniform(0, 2, 300), 1 + rng.uniform(-1e-3, 1e-3, 40)])
     r = np.exp(rng.uniform(np.log(2e-3), np.log(5e5), x.size))
     ref = _quadrature(x, r)
-    fast = np.asarray(jkr_table.shift_first_order_fast(x, r))
+    fast = np.asarray(table.shift_first_order_fast(x, r))
     # measured 1.8e-7 worst (next to x = 1 at large r), ~3e-8 elsewhere
     assert np.max(np.abs(fast - ref)) < 5e-7
     assert np.max(np.abs(fast - ref)[np.abs(x - 1) > 0.01]) < 1e-7
@@ -40,14 +41,14 @@ def test_table_matches_quadrature_at_random_points():
 
 def test_hertz_limit_against_closed_form():
     x = np.linspace(0.0, 0.99, 12)
-    fast = np.asarray(jkr_table.shift_first_order_fast(x, jkr_table.R_MAX))
+    fast = np.asarray(table.shift_first_order_fast(x, table.R_MAX))
     np.testing.assert_allclose(fast, np.asarray(first_order_hertz(jnp.asarray(x))), atol=2e-5)
 
 
 def test_load_ratio_matches_pull_off_force():
     gamma = 0.7
     fc = float(jkr.pull_off_force(gamma=gamma, radius=R))
-    assert float(jkr_table.load_ratio(0.02, gamma=gamma, radius=R)) == pytest.approx(0.02 / fc)
+    assert float(table.load_ratio(0.02, gamma=gamma, radius=R)) == pytest.approx(0.02 / fc)
 
 
 def test_gradients_finite_everywhere_nuts_goes():
@@ -55,7 +56,7 @@ def test_gradients_finite_everywhere_nuts_goes():
     gamma = jnp.array([1e-3, 0.1, 0.7, 5.0, 1e3])
 
     def s(xx, g):
-        return jkr_table.shift_first_order_fast(xx, jkr_table.load_ratio(0.02, gamma=g,
+        return table.shift_first_order_fast(xx, table.load_ratio(0.02, gamma=g,
                                                                           radius=R))
 
     gx, gg = jax.jit(jax.vmap(jax.vmap(jax.grad(s, argnums=(0, 1)), (0, None)), (None, 0)))(x, gamma)

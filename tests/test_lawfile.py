@@ -6,10 +6,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from beadrod.inference.likelihood import scene_quantities
+from beadrod.inference.model.likelihood import scene_quantities
 from beadrod.models import registry
 from beadrod.models.lawfile import LawFileError, load_law_file
-from beadrod.models.scenes import builtin_scene
+from beadrod.models.scene import builtin_scene
 
 SCENE = scene_quantities(builtin_scene("paper"))
 HERE = __import__("pathlib").Path(__file__).parent

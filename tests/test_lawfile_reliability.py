@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from beadrod.inference.likelihood import scene_quantities
+from beadrod.inference.model.likelihood import scene_quantities
 from beadrod.models import registry
 from beadrod.models.lawfile import NAME_MAX, LawFileError, load_law_file
-from beadrod.models.scenes import builtin_scene
+from beadrod.models.scene import builtin_scene
 from beadrod.workflows import lawfiles
 from beadrod.workflows.cli import main
 
@@ -237,7 +237,7 @@ EVIL = f"{SCRIPT} ![x](http://tracker/x.png) [y](javascript:alert(2)) &lt;b&gt; 
 
 
 def test_markdown_escape_keeps_the_projects_markup():
-    from beadrod.workflows.markdown import code_fence, md_escape
+    from beadrod.workflows.report.markdown import code_fence, md_escape
 
     out = md_escape(f"**{EVIL}** `a <b> c` k < 0.7, R&D")
     assert "<script" not in out and "&lt;script>" in out
@@ -249,7 +249,7 @@ def test_markdown_escape_keeps_the_projects_markup():
 
 
 def test_user_text_is_escaped_in_report_md_and_comparison_md(tmp_path):
-    from beadrod.workflows.report import comparison_table, render_report
+    from beadrod.workflows.report.document import comparison_table, render_report
 
     res = {"laws": [{"name": "lf_evil", "label": EVIL, "status": "ok", "log_z": -3.0,
                      "log_z_err": 0.1, "rung": "backbone",

@@ -1,4 +1,4 @@
-"""The Maugis-Dugdale oscillator in parametric form (models.maugis_dugdale_orbit) against
+"""The Maugis-Dugdale oscillator in parametric form (models.laws.maugis_dugdale.orbit) against
 the generic quadrature of the law's force (each force a bracketed root solve, itself
 tested against mpmath in test_maugis_dugdale.py): the mean restoring force over intervals
 (short, long, straddling the contact edge), P', the flight acceleration, the Lindstedt
@@ -13,15 +13,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import dmt, generic, jkr
-from beadrod.models import maugis_dugdale as md
-from beadrod.models import maugis_dugdale_orbit as orbit
+from beadrod.models.ladder import generic
+from beadrod.models.laws import dmt, jkr, maugis_dugdale
+from beadrod.models.laws.maugis_dugdale import orbit
 
 R_BEAD, RHO, NU, G = 7.938e-3, 7700.0, 0.27, 9.80665
 MASS = 4.0 / 3.0 * math.pi * R_BEAD**3 * RHO
 LOAD = MASS * G
 ES = 200e9 / (2 * (1 - NU**2))
-PLAIN = dataclasses.replace(md.LAW, restoring_force=None)   # the generic quadrature of F
+PLAIN = dataclasses.replace(maugis_dugdale.LAW, restoring_force=None)   # the generic quadrature of F
 
 A = jnp.array([-1.0, -1.0, -0.5, 0.0, 0.3, 0.999, -0.9999999, -1.5, -2.0, 0.0])
 B = jnp.array([0.0, 50.0, 1.5, 2.0, 0.3000001, 1.0, -0.9999998, 0.5, -1.2, 1e-13])
@@ -35,8 +35,8 @@ def _kw(gamma, lam):
 @jax.jit
 def _both_forms(gamma, lam):
     kw = _kw(gamma, lam)
-    d0 = md.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=gamma, lam=lam)
-    dp, div, acc = generic.restoring_force(md.LAW, delta0=d0, **kw)
+    d0 = maugis_dugdale.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=gamma, lam=lam)
+    dp, div, acc = generic.restoring_force(maugis_dugdale.LAW, delta0=d0, **kw)
     gdp, gdiv, gacc = generic.restoring_force(PLAIN, delta0=d0, **kw)
     return (div(A, B), div(B, A), dp(Q), acc), (gdiv(A, B), gdiv(-1.0, B), gdp(Q), gacc)
 
@@ -64,8 +64,8 @@ def test_restoring_force_matches_generic_quadrature_of_the_force():
 @jax.jit
 def _lindstedt_both(lam):
     kw = _kw(0.7, lam)
-    d0 = md.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=0.7, lam=lam)
-    return (generic.lindstedt_coefficient(md.LAW, delta0=d0, **kw),
+    d0 = maugis_dugdale.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=0.7, lam=lam)
+    return (generic.lindstedt_coefficient(maugis_dugdale.LAW, delta0=d0, **kw),
             generic.lindstedt_coefficient(PLAIN, delta0=d0, **kw))
 
 
@@ -81,8 +81,8 @@ def test_lindstedt_coefficient_and_its_derivatives_through_the_root():
 def _roots(d, lam):
     grads = [jax.grad(f, argnums=(0, 1))(1.3, lam) for f in (
         lambda a, b: orbit.log_angle_from_overlap(a, b),
-        lambda a, b: jnp.log(md.angle_from_overlap(a, b)))]
-    return orbit.log_angle_from_overlap(d, lam), md.angle_from_overlap(d, lam), grads
+        lambda a, b: jnp.log(maugis_dugdale.angle_from_overlap(a, b)))]
+    return orbit.log_angle_from_overlap(d, lam), maugis_dugdale.angle_from_overlap(d, lam), grads
 
 
 def test_root_matches_the_bracketed_solve():
@@ -98,8 +98,8 @@ def _backbone_gap(law_kw, other, lam, x):
     kw = _kw(law_kw, lam)
     # the exact root solve: lam = 200 and 0.01 lie outside the law's parameter domain,
     # where its tabulated static state is NaN (the generic backbone takes any lam)
-    d0 = md.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=law_kw, lam=lam)
-    s_md = generic.backbone_shift(md.LAW, x, delta0=d0, nodes=24, **kw)
+    d0 = maugis_dugdale.static_overlap(LOAD, e_star=ES, radius=R_BEAD, gamma=law_kw, lam=lam)
+    s_md = generic.backbone_shift(maugis_dugdale.LAW, x, delta0=d0, nodes=24, **kw)
     okw = dict(e_star=ES, radius=R_BEAD, gamma=law_kw, load=LOAD, mass=MASS)
     s_other = generic.backbone_shift(other.LAW, x, delta0=other.LAW.overlap(**okw), nodes=24,
                                      **okw)

@@ -1,4 +1,4 @@
-"""The vectorised R-hat and ESS (inference.mcmc_stats) against arviz's own, element by
+"""The vectorised R-hat and ESS (inference.sampling.mcmc_stats) against arviz's own, element by
 element, on chains with known structure: AR(1) of several correlations, a stuck chain, a
 constant element, odd draw counts, heavy tails."""
 
@@ -6,7 +6,7 @@ import arviz as az
 import numpy as np
 import pytest
 
-from beadrod.inference import mcmc_stats
+from beadrod.inference.sampling import mcmc_stats
 
 
 def _ar1(rng, chains, draws, k, phi):

@@ -1,4 +1,4 @@
-"""The multi-start mode search that places NUTS (inference.modes), on a toy with two
+"""The multi-start mode search that places NUTS (inference.sampling.modes), on a toy with two
 modes of known depth, and the zero likelihood outside a law's domain."""
 
 import jax.numpy as jnp
@@ -8,8 +8,8 @@ import numpyro.distributions as dist
 import pytest
 from jax.scipy.special import logsumexp
 
-from beadrod.inference.modes import find_modes
-from beadrod.inference.sample import run_nuts
+from beadrod.inference.sampling.modes import find_modes
+from beadrod.inference.sampling.sample import run_nuts
 
 # prior N(0, 1); likelihood: two narrow bumps (width W) at A (near the prior median) and B,
 # B's 12 nats taller. Peak log densities, closed form: log N(m; 0, 1) + log bump height
@@ -61,7 +61,7 @@ def test_no_finite_start_is_a_clear_error():
 @pytest.fixture(scope="module")
 def paper_inputs():
     from beadrod import data as bd
-    from beadrod.inference.likelihood import model_inputs
+    from beadrod.inference.model.likelihood import model_inputs
 
     return model_inputs(bd.process(bd.load_dataset(bd.default_path())))
 
@@ -71,7 +71,7 @@ def test_law_domain_gives_zero_likelihood_outside(paper_inputs):
     # parameter point impossible, where the held value would have been fitted silently
     from numpyro.infer.util import log_density
 
-    from beadrod.inference.numpyro_models import build_model
+    from beadrod.inference.model.numpyro_models import build_model
 
     model = build_model("hertz", rung="backbone")
     params = {"young": 200e9, "delta0_scatter": 0.1, "offset_down": -0.005,

@@ -17,29 +17,29 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from beadrod.models import hertz, powerlaw, viscoelastic
+from beadrod.models.laws import hertz, powerlaw, viscoelastic
 from beadrod.models.registry import law_names, register, tension_pair, unregister
 
 ROOT = Path(__file__).resolve().parents[1]
 
 # (module, law name): the only string literals naming a law outside the laws' modules
 ALLOWED: dict[tuple[str, str], str] = {
-    ("inference.numpyro_models", "hertz"):
+    ("inference.model.numpyro_models", "hertz"):
         "ModelSpec's default law (a spec must name one)",
-    ("inference.numpyro_models", "viscoelastic"):
+    ("inference.model.numpyro_models", "viscoelastic"):
         "ModelSpec(eta_mode='split') kept as a compatibility spelling of the split law",
-    ("inference.numpyro_models", "viscoelastic_split"):
+    ("inference.model.numpyro_models", "viscoelastic_split"):
         "the same compatibility mapping, in the other direction",
-    ("workflows.cmd_shift", "viscoelastic"):
+    ("workflows.commands.shift", "viscoelastic"):
         "the former law name 'viscoelastic_paper_eq25', kept as a spelling of a law and rung",
-    ("workflows.bench_inference", "hertz"):
+    ("workflows.bench.inference", "hertz"):
         "the benchmark's reference law (ESS/s of the others is quoted against it)",
-    ("workflows.bench_device", "hertz"):
+    ("workflows.bench.device", "hertz"):
         "the device benchmark times one reference law",
-    ("workflows.plots_data", "powerlaw"):
+    ("workflows.figures.physics", "powerlaw"):
         "default colour of the paper's Fig. 5, a figure of the power law; callers pass "
-        "the law (workflows.compare_figures.exponent_law)",
-    ("workflows.report_truth", "hertz"):
+        "the law (workflows.figures.comparison.exponent_law)",
+    ("workflows.report.truth", "hertz"):
         "a synthetic world's truth says which law generated it (data.synth: Hertz worlds)",
 }
 
@@ -100,10 +100,10 @@ def test_tension_pair_is_found_by_role(renamed):
 
 
 def test_tension_jobs_fit_the_pair_they_are_given(renamed):
-    from beadrod.workflows import compare_outputs
     from beadrod.workflows.config import DEFAULTS
+    from beadrod.workflows.pipeline import outputs
 
-    jobs = compare_outputs.tension_jobs(DEFAULTS, Path("/nonexistent"), "backbone",
+    jobs = outputs.tension_jobs(DEFAULTS, Path("/nonexistent"), "backbone",
                                         "normal", ("kv_test", "kv_test_split"))
     keys = [j.key for j in jobs]
     assert keys == ["tension:eta_q", "tension:kv_test", "tension:kv_test_split",
@@ -115,8 +115,8 @@ def test_tension_jobs_fit_the_pair_they_are_given(renamed):
 
 
 def test_job_order_follows_the_laws_cost(renamed):
-    from beadrod.workflows.parallel import Job
-    from beadrod.workflows.pipeline import comparison_specs, job_order
+    from beadrod.workflows.pipeline.fits import comparison_specs, job_order
+    from beadrod.workflows.pipeline.parallel import Job
 
     specs = comparison_specs(["hertz", "jkr", "baseline", "hertz_costly_test",
                               "viscoelastic"], "backbone", "normal")
@@ -155,8 +155,8 @@ def test_theory_curves_and_f0_ranges_iterate_over_the_laws(renamed):
     sqrt(1.5 F0 / (m delta0)) / (2 pi) with delta0 = (3 F0 / (4 E* sqrt R))^(2/3)."""
     import jax
 
-    from beadrod.models.scenes import builtin_scene
-    from beadrod.workflows.compare_figures import exponent_law, f0_ranges, theory_curves
+    from beadrod.models.scene import builtin_scene
+    from beadrod.workflows.figures.comparison import exponent_law, f0_ranges, theory_curves
 
     scene = builtin_scene("paper")
     x = np.linspace(1e-3, 1.3, 27)

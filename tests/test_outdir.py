@@ -182,7 +182,7 @@ def test_full_disk_while_logging_gives_one_line(tmp_path, capsys):
 def test_figure_worker_ends_with_its_killed_parent(tmp_path):
     code = """
 import os, sys, time
-from beadrod.workflows.figure_pool import FigureWriter
+from beadrod.workflows.figures.pool import FigureWriter
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -283,7 +283,7 @@ def test_bench_refuses_existing_outputs(tmp_path, capsys):
 
 
 def test_resume_with_a_folder_where_a_summary_belongs(tmp_path):
-    from beadrod.workflows.pipeline import _cached
+    from beadrod.workflows.pipeline.fits import _cached
 
     (tmp_path / "hertz.json").mkdir()
     with pytest.raises(UserError, match="is not a file"):
@@ -291,7 +291,7 @@ def test_resume_with_a_folder_where_a_summary_belongs(tmp_path):
 
 
 def test_report_failure_keeps_the_fits_and_says_so(tmp_path):
-    from beadrod.workflows.comparison import _report_failed
+    from beadrod.workflows.pipeline.run import _report_failed
 
     exc = _report_failed(tmp_path, {"hertz": None}, KeyError("protocols"))
     assert isinstance(exc, UserError)

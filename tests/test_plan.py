@@ -9,14 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from beadrod.models import _plan_rod, scenes
-from beadrod.models import plan as planmod
-from beadrod.models.plan import EFFECT_NAMES, RUNGS, plan_scene
+from beadrod.models import scene
+from beadrod.models.scene import plan, plan_rod
+from beadrod.models.scene.plan import EFFECT_NAMES, RUNGS, plan_scene
 
 
 @pytest.fixture(scope="module")
 def plans():
-    return {n: plan_scene(scenes.builtin_scene(n)) for n in scenes.builtin_scene_names()}
+    return {n: plan_scene(scene.builtin_scene(n)) for n in scene.builtin_scene_names()}
 
 
 def test_every_builtin_plan_is_valid(plans):
@@ -70,7 +70,7 @@ def test_plans_differ_as_designed(plans):
 
 
 def test_amplitude_override_and_tolerance_monotone():
-    s = scenes.builtin_scene("paper")
+    s = scene.builtin_scene("paper")
     p = plan_scene(s)
     d0 = p.numbers["delta0_m"]
     big = plan_scene(s, amplitude_max=1.5 * d0)
@@ -83,7 +83,7 @@ def test_amplitude_override_and_tolerance_monotone():
 def test_rod_mass_loading_against_two_dof_eigenvalues():
     """Bead m on contact K0 on one rod mode (M, K_r): the plan's single-mode f0 lowering is
     the exact lower eigenfrequency of the 2-DOF system, and to first order K0 c_b/2."""
-    p = plan_scene(scenes.builtin_scene("paper"))
+    p = plan_scene(scene.builtin_scene("paper"))
     rod = p.effect("rod").details
     m, k0 = p.numbers["mass_kg"], p.numbers["K0_N_m"]
     big_m, kr = rod["modal_mass_kg"], rod["modal_mass_kg"] * (2 * math.pi * rod["f_rod_Hz"]) ** 2
@@ -105,7 +105,7 @@ def test_rod_coupling_against_continuous_bar(name):
     Q_c |T| (viscous Q) or |T| Q (measured Q: Q is then the coupled one): solved directly."""
     from scipy.optimize import brentq
 
-    sc = scenes.builtin_scene(name)
+    sc = scene.builtin_scene(name)
     p = plan_scene(sc)
     rod = p.effect("rod").details
     m, k0, w0 = p.numbers["mass_kg"], p.numbers["K0_N_m"], 2 * math.pi * p.numbers["f0_Hz"]
@@ -149,29 +149,29 @@ def test_pull_of_a_drive_filter_on_the_peak(q, r):
         return w[np.argmax(filt * lt - 0.5 * np.log((wr**2 - w**2) ** 2 + damp**2))]
 
     u = 0.5 * np.pi * r
-    bound = _plan_rod._pull((u / np.cos(u)) ** 2, u * np.tan(u), 4 * q * q)
+    bound = plan_rod._pull((u / np.cos(u)) ** 2, u * np.tan(u), 4 * q * q)
     for scaled in (True, False):
         moved, bare = (peak(1 + s, scaled, v) - peak(1.0, scaled, v) for v in (1, 0))
         f = abs(moved - bare) / abs(s)
         assert f <= bound
         if scaled:
             assert f > 0.6 * bound
-    assert _plan_rod._pull(4 * q * q, 0.0, 4 * q * q) == math.inf
+    assert plan_rod._pull(4 * q * q, 0.0, 4 * q * q) == math.inf
 
 
 def test_first_branch_slows_monotonically_towards_rayleigh():
     """The dispersion bound takes e <= 1 - c_R/c0 above the branch solver's domain: the
     first branch's phase velocity falls from c0 towards the Rayleigh velocity c_R."""
-    from beadrod.models import rod
+    from beadrod.models.scene import rod
 
     nu, young, rho, a = 0.27, 200e9, 7700.0, 6e-3
-    assert _plan_rod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
+    assert plan_rod._rayleigh_over_vt(0.25) == pytest.approx(0.919402, rel=1e-5)
     vt = math.sqrt(young / (2 * (1 + nu)) / rho)
     f = np.linspace(1e3, 0.99 * rod.OMEGA_MAX * vt / (2 * math.pi * a), 200)
     c = np.asarray(rod.first_branch_phase_velocity(f, young=young, poisson=nu, density=rho,
                                                     radius=a))
     assert np.all(np.diff(c) < 0)
-    assert c[-1] > _plan_rod._rayleigh_over_vt(nu) * vt
+    assert c[-1] > plan_rod._rayleigh_over_vt(nu) * vt
 
 
 def _quadratic_law(alpha, k0=1.0, d0=1.0, f0=1.0):
@@ -185,7 +185,7 @@ def _quadratic_law(alpha, k0=1.0, d0=1.0, f0=1.0):
 def test_harmonic_bound_matches_lindstedt_quadratic(alpha, x):
     """q'' + q + alpha q^2 = 0: omega = 1 - (5/12)(alpha x)^2, of which the second harmonic
     carries +(1/12)(alpha x)^2 (Nayfeh & Mook Sec. 4.1); the plan's B(1) is twice it."""
-    e, h = planmod._effect_harmonics(_quadratic_law(alpha), x, tol=1e-30)
+    e, h = plan._effect_harmonics(_quadratic_law(alpha), x, tol=1e-30)
     assert e.value / 2 == pytest.approx((alpha * x) ** 2 / 12, rel=1e-10)
     assert h == 2 and e.details["bound_at_H"] < 1e-25
 
@@ -193,7 +193,7 @@ def test_harmonic_bound_matches_lindstedt_quadratic(alpha, x):
 @pytest.mark.parametrize("alpha,x", [(0.25, 0.3), (0.5, 0.2)])
 def test_contact_loss_margin_matches_lindstedt_quadratic(alpha, x):
     """Lindstedt orbit q = x sin t - alpha x^2/2 + (alpha x^2/6) cos 2t: min = -x - alpha x^2/3."""
-    e = planmod._effect_contact_loss(_quadratic_law(alpha), 1.0, x)
+    e = plan._effect_contact_loss(_quadratic_law(alpha), 1.0, x)
     assert e.threshold == pytest.approx(1 - alpha * x**2 / 3, rel=1e-12)
     assert e.details["mean_shift"] == pytest.approx(-alpha * x**2 / 2, rel=1e-12)
 
@@ -204,17 +204,17 @@ def test_viscous_bound_covers_exact_linear_peaks(q):
     r = np.linspace(0.5, 1.5, 400001)
     force_drive = 1 / np.sqrt((1 - r**2) ** 2 + (2 * zeta * r) ** 2)
     base_drive = np.sqrt(1 + (2 * zeta * r) ** 2) * force_drive
-    bound = planmod._effect_viscous(q, q, 5e-3).error_bound
+    bound = plan._effect_viscous(q, q, 5e-3).error_bound
     for resp in (force_drive, base_drive):
         assert abs(r[np.argmax(resp)] - 1) <= bound
     assert abs(r[np.argmax(force_drive)] - 1) > bound / 4  # and not vacuous
 
 
 def test_plan_command_json(capsys):
-    from beadrod.workflows import cmd_plan
+    from beadrod.workflows.commands import plan
 
     parser = argparse.ArgumentParser()
-    cmd_plan.register(parser.add_subparsers())
+    plan.register(parser.add_subparsers())
     args = parser.parse_args(["plan", "--builtin", "strong_drive", "--json"])
     assert args.func(args) == 0
     d = json.loads(capsys.readouterr().out)
@@ -232,13 +232,13 @@ def test_rung_error_estimates_cover_exact_backbone():
     estimate and its series / first-order error estimates are upper bounds for x <= 0.9."""
     import jax.numpy as jnp
 
-    from beadrod.models.backbone import backbone_shift, lindstedt_shift
-    from beadrod.models.shift import first_order_hertz
+    from beadrod.models.ladder.backbone import backbone_shift, lindstedt_shift
+    from beadrod.models.ladder.first_order import first_order_hertz
 
     xs = np.array([0.1, 0.3, 0.6, 0.9])
     exact = np.asarray(backbone_shift(jnp.asarray(xs), 1.5))
     for x, s in zip(xs, exact):
-        assert planmod.shift_estimate(float(x)) >= abs(s)
+        assert plan.shift_estimate(float(x)) >= abs(s)
         s_lin = float(lindstedt_shift(x, 1.5))
         err_series = abs(s_lin) * x**2
         err_first = abs(float(first_order_hertz(x)) - s_lin) + err_series

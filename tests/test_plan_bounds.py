@@ -5,7 +5,7 @@ simulating WITH it must change Delta f/f0 (harmonic-balance resonance peak at eq
 amplitude, the plan's largest amplitude unless noted) by less than the plan's
 ``error_bound``; for effects it includes, leaving one out must change the result by more
 than the tolerance. Bounds found dishonest are marked xfail(strict) with the measured
-numbers, so they flip to failures once models/plan.py is fixed: they are reported, not
+numbers, so they flip to failures once models/scene/plan.py is fixed: they are reported, not
 loosened. The plan's largest amplitude is also checked: the simulated bead reaches it only
 at a base drive >= the scene's largest.
 """
@@ -14,9 +14,9 @@ import math
 
 import pytest
 
-from beadrod.models.plan import plan_scene
-from beadrod.models.scenes import builtin_scene
-from beadrod.models.simulate import build_simulator
+from beadrod.models.scene import builtin_scene
+from beadrod.models.scene.plan import plan_scene
+from beadrod.models.scene.simulate import build_simulator
 
 _PLANS = {}
 

@@ -1,5 +1,5 @@
 """Figures: every function writes a non-empty PNG and PDF, and draws what it claims;
-one colour and label per law (workflows.styles); the compare figures from a tiny fit."""
+one colour and label per law (workflows.figures.styles); the compare figures from a tiny fit."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from matplotlib.collections import PolyCollection
 from matplotlib.text import Text
 
-from beadrod.workflows import figure_data, plots, plots_data, styles
+from beadrod.workflows.figures import gallery, numbers, physics, styles
 
 
 def _idata(seed: int = 0, chains: int = 2, draws: int = 60, n_obs: int = 15, shift: float = 0.0):
@@ -51,7 +51,7 @@ def _panel(name: str = "hertz", seed: int = 0, n: int = 40, label: str | None = 
     grid = np.concatenate([[0.0], np.geomspace(0.01, 1.05, 40)])
     q50 = -0.05 * grid**2
     curve = (q50 - 0.002, q50, q50 + 0.002)  # q95 > 0 where x < 0.2
-    return plots.ShiftPanel(name=name, label=label or name, x=x, grid=grid, curve=curve,
+    return gallery.ShiftPanel(name=name, label=label or name, x=x, grid=grid, curve=curve,
                             predictive=(q50 - 0.01, q50 + 0.01), down=q50 - 0.003,
                             residual=rng.normal(size=n), sigma=0.01)
 
@@ -78,34 +78,34 @@ def _cases():
                            ("backbone", 0.0, 1e-3)) for xx in (0.1, 0.5)]
     n = np.linspace(1.01, 3, 20)
     return {
-        "shift_curves": lambda: plots.fig_shift_curves(
+        "shift_curves": lambda: gallery.fig_shift_curves(
             x, {"Hertz": -0.05 * x**2, "JKR": -0.04 * x**2,
                 "viscoelastic, paper Eq. 25 (eta = 1.05 MPa s)": -0.2 * x,
-                "viscoelastic: fit": plots.Curve(-0.05 * x**2, "viscoelastic",
+                "viscoelastic: fit": gallery.Curve(-0.05 * x**2, "viscoelastic",
                                                  band=(-0.06 * x**2, -0.04 * x**2))}),
-        "max_shift": lambda: plots.fig_max_shift_vs_n(n, 0.1 * (n - 1) * (n - 2), -0.1 * (n - 1),
+        "max_shift": lambda: gallery.fig_max_shift_vs_n(n, 0.1 * (n - 1) * (n - 2), -0.1 * (n - 1),
                                                       fitted=(2.9, 2.8, 2.97)),
-        "f0_ranges": lambda: plots.fig_f0_ranges(
+        "f0_ranges": lambda: gallery.fig_f0_ranges(
             rng.uniform(2500, 2900, 28), {"Hertz": (2600.0, 2700.0), "JKR": (2740.0, 2860.0)},
             protocol_ids=[f"P{i:02d}" for i in range(1, 29)]),
-        "ppc_lin": lambda: plots.fig_shift_ppc(panels, y, dd, proto, preferred="hertz"),
-        "ppc_log": lambda: plots.fig_shift_ppc(panels, y, dd, proto, log=True),
-        "q_vs_f0": lambda: plots.fig_q_vs_f0(rng.uniform(2500, 2900, 28), rng.uniform(20, 100, 28)),
-        "inv_q": lambda: plots.fig_inv_q_shift(xd, 1e-3 * xd, d),
-        "eta": lambda: plots.fig_eta_tension(
+        "ppc_lin": lambda: gallery.fig_shift_ppc(panels, y, dd, proto, preferred="hertz"),
+        "ppc_log": lambda: gallery.fig_shift_ppc(panels, y, dd, proto, log=True),
+        "q_vs_f0": lambda: gallery.fig_q_vs_f0(rng.uniform(2500, 2900, 28), rng.uniform(20, 100, 28)),
+        "inv_q": lambda: gallery.fig_inv_q_shift(xd, 1e-3 * xd, d),
+        "eta": lambda: gallery.fig_eta_tension(
             {"shift": rng.normal(6.0, 0.1, 500), "Q": rng.normal(5.0, 0.1, 500),
              "joint (shared eta)": rng.normal(5.5, 0.05, 500)}),
-        "evidence": lambda: plots.fig_evidence(
+        "evidence": lambda: gallery.fig_evidence(
             ["Hertz", "viscoelastic (shared eta)", "JKR"], [-10.0, -2.0, np.nan],
             [0.3, 0.2, np.nan], [-10.2, -2.1, np.nan], [0.4, 0.3, np.nan],
             failed=[False, False, True], names=["hertz", "viscoelastic", "jkr"],
             preferred="viscoelastic"),
-        "pair": lambda: plots.fig_pair(
+        "pair": lambda: gallery.fig_pair(
             _idata(), ["mu", "log_sigma", "v"], units={"mu": "Hz", "log_sigma": "-", "v": "m"}),
-        "rank": lambda: plots.fig_rank(_idata(), ["mu", "v"]),
-        "loo_pit": lambda: plots.fig_loo_pit(_idata()),
-        "frc": lambda: plots.fig_frc(freq, frc, ["0.1 V", "0.2 V", "0.3 V"]),
-        "accuracy": lambda: plots.fig_accuracy_cost(acc),
+        "rank": lambda: gallery.fig_rank(_idata(), ["mu", "v"]),
+        "loo_pit": lambda: gallery.fig_loo_pit(_idata()),
+        "frc": lambda: gallery.fig_frc(freq, frc, ["0.1 V", "0.2 V", "0.3 V"]),
+        "accuracy": lambda: gallery.fig_accuracy_cost(acc),
     }
 
 
@@ -114,7 +114,7 @@ def test_every_figure_writes_png_and_pdf(tmp_path, name):
     fig = _cases()[name]()
     assert fig.axes, "figure has no axes"
     base = tmp_path / "figures" / name
-    paths = plots.save_figure(fig, base)
+    paths = gallery.save_figure(fig, base)
     _check_written(paths, base)
     assert not plt.fignum_exists(fig.number), "save_figure must close the figure"
 
@@ -132,9 +132,9 @@ def test_axes_are_labelled_with_units():
 
 
 def test_save_failure_leaves_nothing_and_closes(tmp_path):
-    fig = plots.fig_q_vs_f0(np.array([2600.0, 2700.0]), np.array([30.0, 60.0]))
+    fig = gallery.fig_q_vs_f0(np.array([2600.0, 2700.0]), np.array([30.0, 60.0]))
     with pytest.raises(ValueError):
-        plots.save_figure(fig, tmp_path / "bad", formats=("png", "not-a-format"))
+        gallery.save_figure(fig, tmp_path / "bad", formats=("png", "not-a-format"))
     assert [p.name for p in tmp_path.iterdir()] == ["bad.png"]
     assert not plt.fignum_exists(fig.number)
 
@@ -212,7 +212,7 @@ def _legend_clear_of_axes(fig):
 def test_shift_ppc_lin_small_multiples_data_on_top_legend_outside():
     y, d, proto = _data()
     panels = [_panel("hertz"), _panel("powerlaw", 3), _panel("baseline", 4)]
-    fig = plots.fig_shift_ppc(panels, y, d, proto, preferred="powerlaw")
+    fig = gallery.fig_shift_ppc(panels, y, d, proto, preferred="powerlaw")
     curve_axes = [ax for ax in fig.axes if ax.get_ylabel() != "std. residual [-]"
                   and ax.get_title()]
     assert len(curve_axes) == 3
@@ -240,7 +240,7 @@ def test_shift_ppc_log_is_clipped_at_the_floor():
     y[:3] = [2e-4, -1e-5, -3e-4]  # a positive shift and two below the floor
     p = _panel("hertz")
     floor = 1e-3
-    fig = plots.fig_shift_ppc([p], y, d, proto, log=True, floor=floor)
+    fig = gallery.fig_shift_ppc([p], y, d, proto, log=True, floor=floor)
     ax = fig.axes[0]
     assert ax.get_xscale() == ax.get_yscale() == "log"
     assert ax.get_ylim()[0] == pytest.approx(floor)
@@ -262,16 +262,16 @@ def test_shift_ppc_log_is_clipped_at_the_floor():
 def test_shift_ppc_rejects_misaligned_panels():
     y, d, proto = _data()
     with pytest.raises(ValueError, match="shape"):
-        plots.fig_shift_ppc([_panel(n=7)], y, d, proto)
+        gallery.fig_shift_ppc([_panel(n=7)], y, d, proto)
     with pytest.raises(ValueError, match="at least one"):
-        plots.fig_shift_ppc([], y, d, proto)
+        gallery.fig_shift_ppc([], y, d, proto)
 
 
 # ------------------------------------------------------------------------- other figures
 
 def test_max_shift_draws_both_rungs_and_the_fitted_n():
-    from beadrod.models.backbone_table import backbone_shift_fast
-    from beadrod.models.shift import first_order_powerlaw
+    from beadrod.models.ladder.first_order import first_order_powerlaw
+    from beadrod.models.tables.powerlaw_backbone import backbone_shift_fast
 
     n = np.linspace(1.01, 3.0, 60)
     fo = np.asarray(first_order_powerlaw(1.0, n))
@@ -279,7 +279,7 @@ def test_max_shift_draws_both_rungs_and_the_fitted_n():
     # the physics the figure exists to show: the paper's first order hardens past n = 2,
     # the exact backbone softens for every n > 1
     assert fo[n > 2.05].min() > 0 and bb.max() < 0
-    fig = plots.fig_max_shift_vs_n(n, fo, bb, fitted=(2.5, 2.4, 2.6))
+    fig = gallery.fig_max_shift_vs_n(n, fo, bb, fitted=(2.5, 2.4, 2.6))
     ax = fig.axes[0]
     ys = [np.asarray(ln.get_ydata()) for ln in ax.lines if len(ln.get_xdata()) == n.size]
     assert len(ys) == 2
@@ -293,8 +293,8 @@ def test_max_shift_draws_both_rungs_and_the_fitted_n():
 def test_coinciding_curves_stay_visible():
     x = np.linspace(0, 1, 50)
     same = -0.05 * x**2
-    fig = plots.fig_shift_curves(x, {"Hertz: fit": plots.Curve(same, "hertz"),
-                                     "viscoelastic: fit": plots.Curve(same, "viscoelastic")})
+    fig = gallery.fig_shift_curves(x, {"Hertz: fit": gallery.Curve(same, "hertz"),
+                                     "viscoelastic: fit": gallery.Curve(same, "viscoelastic")})
     lines = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) == x.size]
     assert len(lines) == 2
     # alternating dashes: one pattern at two offsets, so each colour shows along the curve
@@ -316,7 +316,7 @@ def test_f0_ranges_legend_hides_no_protocol():
 def test_eta_tension_q_alone_is_not_hidden_by_the_joint_curve():
     rng = np.random.default_rng(3)
     same = rng.normal(5.0, 0.05, 2000)
-    fig = plots.fig_eta_tension({"Q alone": same, "joint (shared eta)": same.copy()})
+    fig = gallery.fig_eta_tension({"Q alone": same, "joint (shared eta)": same.copy()})
     ax = fig.axes[0]
     filled = [p for p in ax.patches if p.get_fill() and p.get_alpha()]
     steps = [p for p in ax.patches if not p.get_fill()]
@@ -331,20 +331,20 @@ def test_inv_q_shift_binned_trend_is_the_median_per_bin():
     rng = np.random.default_rng(4)
     x = np.geomspace(0.02, 1.0, 400)
     y = 1e-3 * np.log10(x) + 1e-4 * rng.normal(size=x.size)
-    c, med, q25, q75 = plots_data.binned_trend(x, y, bins=5)
+    c, med, q25, q75 = physics.binned_trend(x, y, bins=5)
     edges = np.geomspace(x.min(), x.max(), 6)
     for b in range(5):
         v = y[(x >= edges[b]) & ((x < edges[b + 1]) if b < 4 else (x <= edges[b + 1]))]
         assert med[b] == pytest.approx(np.median(v))
         assert q25[b] < med[b] < q75[b]
-    fig = plots.fig_inv_q_shift(x, y, np.zeros(x.size, int), bins=5)
+    fig = gallery.fig_inv_q_shift(x, y, np.zeros(x.size, int), bins=5)
     trend = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) == 5]
     np.testing.assert_allclose(trend[0].get_ydata(), med)
     plt.close(fig)
 
 
 def test_evidence_is_relative_to_the_preferred_law_and_prints_values():
-    fig = plots.fig_evidence(["a", "b", "c"], [100.0, 60.0, 103.0], [0.1, 0.2, 0.05],
+    fig = gallery.fig_evidence(["a", "b", "c"], [100.0, 60.0, 103.0], [0.1, 0.2, 0.05],
                              names=["hertz", "jkr", "baseline"], preferred="hertz")
     ax = fig.axes[0]
     ys = sorted(float(ln.get_ydata()[0]) for ln in ax.lines if ln.get_marker() == "o")
@@ -360,7 +360,7 @@ def test_evidence_is_relative_to_the_preferred_law_and_prints_values():
     plt.close(fig)
     # errors of 1 nat on a 3-nat axis are visible: no note; a failed law says so by name;
     # without a preferred law the reference is the given one
-    big = plots.fig_evidence(["a", "b"], [100.0, 97.0], [1.0, 1.5], failed=[False, True],
+    big = gallery.fig_evidence(["a", "b"], [100.0, 97.0], [1.0, 1.5], failed=[False, True],
                              reference="b")
     ax = big.axes[0]
     assert not any("smaller than the markers" in t.get_text() for t in ax.texts)
@@ -377,11 +377,11 @@ def tiny_fit(tmp_path_factory):
     """Hertz fitted to the embedded data with a few NUTS draws (one chain); the evidence
     table lists a second law that has no fit."""
     from beadrod import data as bd
-    from beadrod.inference.likelihood import model_inputs
-    from beadrod.inference.numpyro_models import build_model
-    from beadrod.inference.sample import run_nuts
-    from beadrod.workflows.compare_figures import fitted_specs
-    from beadrod.workflows.pipeline import LawRun
+    from beadrod.inference.model.likelihood import model_inputs
+    from beadrod.inference.model.numpyro_models import build_model
+    from beadrod.inference.sampling.sample import run_nuts
+    from beadrod.workflows.figures.comparison import fitted_specs
+    from beadrod.workflows.pipeline.fits import LawRun
 
     ds = bd.load_default()
     inputs = model_inputs(ds)
@@ -405,12 +405,12 @@ def tiny_fit(tmp_path_factory):
 
 def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkeypatch):
     """Every compare figure is written (PNG and PDF); written by the writer processes
-    (workflows.figure_pool) every one pickles (none falls back to this process) and comes
+    (workflows.figures.pool) every one pickles (none falls back to this process) and comes
     out pixel for pixel the same."""
     import matplotlib.image as mpimg
 
-    from beadrod.workflows import figure_pool
-    from beadrod.workflows.compare_figures import make_figures
+    from beadrod.workflows.figures import pool
+    from beadrod.workflows.figures.comparison import make_figures
 
     ds, inputs, runs, result, _, out = tiny_fit
     entries = make_figures(runs, inputs, ds, result, out)
@@ -422,7 +422,7 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkey
         _check_written([out / e["path"], out / e["path"].replace(".png", ".pdf")],
                        out / e["path"][:-4])
     unpickled = []
-    monkeypatch.setattr(figure_pool.log, "debug", lambda *a: unpickled.append(a))
+    monkeypatch.setattr(pool.log, "debug", lambda *a: unpickled.append(a))
     pooled = make_figures(runs, inputs, ds, result, tmp_path, processes=2)
     assert not unpickled, unpickled
     assert [e["path"] for e in pooled] == [e["path"] for e in entries]
@@ -432,10 +432,10 @@ def test_every_compare_figure_renders_from_a_tiny_fit(tiny_fit, tmp_path, monkey
 
 
 def test_tiny_fit_panels_follow_the_law(tiny_fit):
-    from beadrod.models import hertz
+    from beadrod.models.laws import hertz
 
     ds, inputs, runs, _, specs, _ = tiny_fit
-    hz = figure_data.shift_panel("hertz", "Hertz", specs["hertz"], runs["hertz"].idata,
+    hz = numbers.shift_panel("hertz", "Hertz", specs["hertz"], runs["hertz"].idata,
                                  inputs, ds)
     # x is delta_a over the Hertz overlap the measured f0 implies: 3 F0 / (2 m omega0^2)
     f0 = np.asarray(ds.f0)[np.asarray(inputs["proto"])]
@@ -445,7 +445,7 @@ def test_tiny_fit_panels_follow_the_law(tiny_fit):
     # Hertz has no free shape: every draw is the first-order curve, 0 at x = 0 and
     # sqrt(2)/pi - 1/2 at x = 1 (the averaged tangent stiffness in closed form)
     np.testing.assert_allclose(hz.curve[0], hz.curve[2], atol=1e-12)
-    q05, q50, q95 = figure_data.fitted_curve(specs["hertz"], runs["hertz"].idata,
+    q05, q50, q95 = numbers.fitted_curve(specs["hertz"], runs["hertz"].idata,
                                              np.array([0.0, 1.0]), inputs)
     assert q50 == pytest.approx([0.0, np.sqrt(2) / np.pi - 0.5], abs=1e-9)
     assert hertz.EXPONENT == 1.5
@@ -455,13 +455,13 @@ def test_tiny_fit_panels_follow_the_law(tiny_fit):
     # the residuals show where the law misses: the data soften more than Hertz at large
     # amplitude (the embedded world follows the paper's Eq. 25, linear in x)
     assert np.mean(hz.residual[hz.x > 0.6]) < -1.0 < np.mean(hz.residual[hz.x < 0.3])
-    floor = figure_data.noise_floor([hz])
+    floor = numbers.noise_floor([hz])
     assert 0.05 * hz.sigma < floor <= 0.1 * hz.sigma
 
 
 def test_rank_plot_flags_a_stuck_chain():
     def chain_counts(idata):
-        fig = plots.fig_rank(idata, ["mu"], bins=4)
+        fig = gallery.fig_rank(idata, ["mu"], bins=4)
         steps = [p for p in fig.axes[0].patches if hasattr(p, "get_data")]
         counts = np.array([s.get_data().values for s in steps])
         plt.close(fig)
@@ -477,11 +477,11 @@ def test_rank_plot_flags_a_stuck_chain():
 
 
 def test_posterior_columns_flattens_vectors():
-    names, draws = plots.posterior_columns(_idata(), ["mu", "v"])
+    names, draws = gallery.posterior_columns(_idata(), ["mu", "v"])
     assert names == ["mu", "v[0]", "v[1]"]
     assert draws.shape == (2, 60, 3)
     with pytest.raises(KeyError, match="nope"):
-        plots.posterior_columns(_idata(), ["nope"])
+        gallery.posterior_columns(_idata(), ["nope"])
 
 
 def test_loo_pit_needs_its_groups():
@@ -489,12 +489,12 @@ def test_loo_pit_needs_its_groups():
 
     idata = az.from_dict(posterior={"mu": np.zeros((1, 10))})
     with pytest.raises(ValueError, match="observed_data"):
-        plots.fig_loo_pit(idata)
+        gallery.fig_loo_pit(idata)
 
 
 def test_frc_rejects_mismatched_labels():
     with pytest.raises(ValueError, match="labels"):
-        plots.fig_frc(np.linspace(1, 2, 3), [np.ones(3)], ["a", "b"])
+        gallery.fig_frc(np.linspace(1, 2, 3), [np.ones(3)], ["a", "b"])
 
 
 def test_save_figure_solves_the_layout_once(tmp_path, monkeypatch):
@@ -517,7 +517,7 @@ def test_save_figure_solves_the_layout_once(tmp_path, monkeypatch):
     for ax in axes2.flat:
         ax.set_xlabel("x [m]")
         ax.set_ylabel("a long label [N]")
-    _check_written(plots.save_figure(fig2, tmp_path / "f"), tmp_path / "f")
+    _check_written(gallery.save_figure(fig2, tmp_path / "f"), tmp_path / "f")
     assert len(calls) == 1
     np.testing.assert_allclose([ax.get_position().bounds for ax in axes2.flat], solved,
                                atol=1e-9)

@@ -3,11 +3,11 @@
 datasets).
 
 For every contact law of the registry that the inference supports (``models.registry``
-laws that ``inference.numpyro_models`` builds and ``beadrod compare`` fits, and that
+laws that ``inference.model.numpyro_models`` builds and ``beadrod compare`` fits, and that
 have a truth below: hertz, powerlaw, viscoelastic, jkr, dmt, greenwood_williamson,
 maugis_dugdale) one
 dataset is simulated from that law, with the exact ModelSpec the comparison
-pipeline fits (``workflows.pipeline.comparison_specs`` at the default rung of
+pipeline fits (``workflows.pipeline.fits.comparison_specs`` at the default rung of
 ``workflows.config.DEFAULTS``, the exact backbone for every law). Then
 
 * the generating law is fitted by NUTS with the comparison's sampling settings
@@ -97,7 +97,7 @@ each limit matches the data with a gamma of its own; what the data fix is the pu
 force. The three are therefore tied in both directions; this was decided after that run.
 The same run found Maugis-Dugdale's own fit failing the gate (R-hat 1.05, bulk ESS 160):
 its gamma followed a curved ridge over ln lam; the law now samples gamma scaled by its
-pull-off coefficient (models.maugis_dugdale), which straightens it.
+pull-off coefficient (models.laws.maugis_dugdale), which straightens it.
 
 Chains. Until 2026-12 the fits ran 2 chains x 1000 draws, half the comparison's, against
 the same gate (ESS >= 400 summed over chains, set for the comparison's four). DMT on
@@ -114,17 +114,17 @@ from typing import Any
 import numpy as np
 import pytest
 
-from beadrod.inference import diagnostics
-from beadrod.inference.bridge import bridge_sampling_log_z
-from beadrod.inference.evidence import EvidenceResult
-from beadrod.inference.likelihood import design_inputs, simulate
-from beadrod.inference.numpyro_models import LAWS as INFERENCE_LAWS
-from beadrod.inference.numpyro_models import build_model
-from beadrod.inference.sample import run_nuts
+from beadrod.inference.evidence.bridge import bridge_sampling_log_z
+from beadrod.inference.evidence.log_z import EvidenceResult
+from beadrod.inference.model.likelihood import design_inputs, simulate
+from beadrod.inference.model.numpyro_models import LAWS as INFERENCE_LAWS
+from beadrod.inference.model.numpyro_models import build_model
+from beadrod.inference.sampling import diagnostics
+from beadrod.inference.sampling.sample import run_nuts
 from beadrod.models import registry
-from beadrod.models.scenes import builtin_scene
+from beadrod.models.scene import builtin_scene
 from beadrod.workflows.config import DEFAULTS
-from beadrod.workflows.pipeline import MODEL_SPECS, comparison_specs
+from beadrod.workflows.pipeline.fits import MODEL_SPECS, comparison_specs
 
 pytestmark = pytest.mark.slow
 

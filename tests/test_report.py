@@ -15,11 +15,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from beadrod.workflows.report import comparison_table, render_report, statistical_warnings
-from beadrod.workflows.report_params import param_table, prior_text, priors_table
-from beadrod.workflows.report_tables import fmt_pm, headline, timings_table
-from beadrod.workflows.report_tension import tension_sentences, tension_table
-from beadrod.workflows.report_truth import world_truth
+from beadrod.workflows.report.document import comparison_table, render_report, statistical_warnings
+from beadrod.workflows.report.params import param_table, prior_text, priors_table
+from beadrod.workflows.report.tables import fmt_pm, headline, timings_table
+from beadrod.workflows.report.tension import tension_sentences, tension_table
+from beadrod.workflows.report.truth import world_truth
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -299,7 +299,7 @@ def test_priors_table_lists_every_law_prior_readably(tmp_path):
     assert rows["E (young)"][2] == "Hertz, Viscoelastic"
     assert rows["η (eta)"][1] == "LogUniform(0.0001, 100) MPa s"
     assert rows["n (n)"][1] == "Uniform(1, 3)"
-    for r in body:  # a justification from inference.priors, as plain text
+    for r in body:  # a justification from inference.model.priors, as plain text
         assert len(r[3]) > 30 and "`" not in r[3], r
     assert "Hurst" in rows["n (n)"][3]
     md = render_report(res, tmp_path)[0].read_text()
@@ -495,7 +495,7 @@ def test_truth_shown_or_explained_never_an_empty_column(tmp_path):
 def test_protocol_truth_coverage():
     import arviz as az
 
-    from beadrod.workflows.report_truth import protocol_truth
+    from beadrod.workflows.report.truth import protocol_truth
 
     rng = np.random.default_rng(0)
     d0 = np.array([50e-9, 55e-9, 45e-9])
@@ -560,7 +560,7 @@ def test_data_section_lists_exclusions_per_protocol(tmp_path):
 
 def test_exclusions_of_the_embedded_data_match_its_truth():
     from beadrod.data import load_default
-    from beadrod.workflows.compare_outputs import exclusions
+    from beadrod.workflows.pipeline.outputs import exclusions
 
     ex = exclusions(load_default().excluded)
     truth = json.loads((ROOT / "data/paper_like/truth.json").read_text())
@@ -687,7 +687,7 @@ def test_headline_when_no_law_passed_its_gate(tmp_path):
 
 
 def test_diagnostics_warnings_say_each_reason_once():
-    from beadrod.workflows.report_tables import diagnostics_table
+    from beadrod.workflows.report.tables import diagnostics_table
 
     law = _law("a", "A", -1.0, 0.1, -1.0, status="failed", failures=["R-hat max 1.03 >= 1.01"])
     law["diagnostics"]["rhat_max"] = 1.03

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from beadrod.workflows.report import render_report
+from beadrod.workflows.report.document import render_report
 
 _NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 CHROMIUM = next((p for p in map(shutil.which, _NAMES) if p), None)

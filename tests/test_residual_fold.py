@@ -1,4 +1,4 @@
-"""The residual fold (inference.residual_fold) of Maugis-Dugdale's sweep likelihood, whose
+"""The residual fold (inference.speed.residual_fold) of Maugis-Dugdale's sweep likelihood, whose
 curve depends on two parameters: its sums, log-likelihood and derivatives against the
 exact ones, its fallback, the model's log density with and without it, and the
 point-wise likelihood that LOO reads."""
@@ -12,13 +12,13 @@ import pytest
 from numpyro import handlers
 from numpyro.infer.util import log_density
 
-from beadrod.inference import residual_fold as R
-from beadrod.inference.likelihood import model_inputs
-from beadrod.inference.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
-from beadrod.inference.priors import law_prior
+from beadrod.inference.model.likelihood import model_inputs
+from beadrod.inference.model.numpyro_models import ModelSpec, SweepCurve, build_model, step_fold
+from beadrod.inference.model.priors import law_prior
+from beadrod.inference.speed import residual_fold
 from beadrod.models.registry import get_law
 from beadrod.workflows.config import DEFAULTS
-from beadrod.workflows.pipeline import load_data
+from beadrod.workflows.pipeline.fits import load_data
 
 LAW = "maugis_dugdale"
 
@@ -34,7 +34,7 @@ def folded(inputs):
     search's, which a fit traces first). There lambda's LogUniform prior, built under the
     trace, held traced log bounds, whose quantiles gave no range, and the fold was
     silently skipped in every fit."""
-    from beadrod.inference import fold as F
+    from beadrod.inference.speed import fold as F
 
     law = get_law(LAW)
     sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
@@ -47,7 +47,7 @@ def folded(inputs):
 
     jax.jit(traced)(jnp.zeros(()))
     fold = got[0]
-    assert isinstance(fold, R.ResidualFold)
+    assert isinstance(fold, residual_fold.ResidualFold)
     assert fold.params == ("gamma", "lam")
     base = {p.name: law_prior(p, {}).icdf(jnp.asarray(0.5)) for p in law.params}
     return sweeps, fold, base
@@ -67,11 +67,11 @@ def test_folded_log_likelihood_within_its_bound(folded, inputs):
     one by at most TOL at noise sigma_ref and offsets within offset_span of offset_ref,
     what the fold promises; outside its box the exact sums themselves."""
     sweeps, fold, base = folded
-    assert fold.usable.mean() > 0.5 and fold.max_error <= R.TOL
+    assert fold.usable.mean() > 0.5 and fold.max_error <= residual_fold.TOL
 
     def both(z):
         theta = {**base, "gamma": jnp.exp(z[0]), "lam": jnp.exp(z[1])}
-        return R.sums(fold, theta, sweeps.residual_sums), sweeps.residual_sums(theta)
+        return residual_fold.sums(fold, theta, sweeps.residual_sums), sweeps.residual_sums(theta)
 
     z, usable = _points(fold, np.random.default_rng(7), 120)
     # below the box in gamma (a larger load ratio, inside the law's domain)
@@ -82,9 +82,9 @@ def test_folded_log_likelihood_within_its_bound(folded, inputs):
     n, d2 = d.size, float(np.sum(d * d))
     for o in (fold.offset_ref - fold.offset_span, fold.offset_ref,
               fold.offset_ref + fold.offset_span):
-        miss = np.abs(np.asarray(R.log_likelihood(got[:-2].T, o, fold.sigma_ref, n, d2))
-                      - np.asarray(R.log_likelihood(want[:-2].T, o, fold.sigma_ref, n, d2)))
-        assert np.all(miss[usable] <= R.TOL), np.max(miss[usable])
+        miss = np.abs(np.asarray(residual_fold.log_likelihood(got[:-2].T, o, fold.sigma_ref, n, d2))
+                      - np.asarray(residual_fold.log_likelihood(want[:-2].T, o, fold.sigma_ref, n, d2)))
+        assert np.all(miss[usable] <= residual_fold.TOL), np.max(miss[usable])
     assert np.allclose(got[-2:], want[-2:], rtol=1e-12, atol=0)
 
 
@@ -95,7 +95,7 @@ def test_folded_gradient_matches_the_exact_one(folded):
     z, usable = _points(fold, np.random.default_rng(11), 12)
 
     def s(zz):
-        return R.sums(fold, {**base, "gamma": jnp.exp(zz[0]), "lam": jnp.exp(zz[1])},
+        return residual_fold.sums(fold, {**base, "gamma": jnp.exp(zz[0]), "lam": jnp.exp(zz[1])},
                       sweeps.residual_sums)
 
     fwd = np.asarray(jax.jit(jax.vmap(jax.jacfwd(s)))(jnp.asarray(z)))
@@ -128,7 +128,7 @@ def test_folded_model_has_the_exact_log_density(folded, inputs):
         assert np.isfinite(a) == np.isfinite(b)
         if np.isfinite(b):
             compared += 1
-            assert abs(a - b) <= R.TOL
+            assert abs(a - b) <= residual_fold.TOL
     assert compared >= 10
 
 
@@ -145,13 +145,13 @@ def test_pointwise_likelihood_is_the_exact_one(inputs):
         return handlers.trace(sub).get_trace(data)
 
     folded = trace(inputs)
-    pointwise = trace({**inputs, R.POINTWISE: True})
+    pointwise = trace({**inputs, residual_fold.POINTWISE: True})
     assert "shift_obs" not in folded and "shift_obs_folded" in folded
     assert "shift_obs" in pointwise and "shift_obs_folded" not in pointwise
     site = pointwise["shift_obs"]
     total = float(jnp.sum(site["fn"].log_prob(site["value"])))
     factor = folded["shift_obs_folded"]
-    assert abs(total - float(factor["fn"].log_prob(factor["value"]))) <= R.TOL
+    assert abs(total - float(factor["fn"].log_prob(factor["value"]))) <= residual_fold.TOL
 
 
 def test_fold_of_a_kinked_toy_curve_keeps_its_bound():
@@ -173,7 +173,7 @@ def test_fold_of_a_kinked_toy_curve_keeps_its_bound():
         r = y - curve(theta["a"], theta["b"])
         return jnp.stack([jnp.sum(r * r), jnp.sum(d * r)])
 
-    fold = R.build_residual_fold(
+    fold = residual_fold.build_residual_fold(
         exact, {"a": 0.04, "b": 0.9}, ("a", "b"), ((0.01, 0.2), (0.3, 3.0)),
         lambda th: jnp.asarray(True), lambda th: -jnp.log(th["a"]) - jnp.log(th["b"]),
         x.size, float(np.sum(d * d)))
@@ -182,14 +182,14 @@ def test_fold_of_a_kinked_toy_curve_keeps_its_bound():
     hi = lo + np.asarray(fold.width) * np.array(fold.cells)
     assert lo[0] < np.log(0.04) < hi[0] and lo[1] < np.log(0.9) < hi[1]
     z, usable = _points(fold, np.random.default_rng(4), 400)
-    sums = jax.jit(jax.vmap(lambda zz: (R.sums(fold, {"a": jnp.exp(zz[0]), "b": jnp.exp(zz[1])},
+    sums = jax.jit(jax.vmap(lambda zz: (residual_fold.sums(fold, {"a": jnp.exp(zz[0]), "b": jnp.exp(zz[1])},
                                                exact),
                                         exact({"a": jnp.exp(zz[0]), "b": jnp.exp(zz[1])}))))
     got, want = (np.asarray(v) for v in sums(jnp.asarray(z)))
     for o in (fold.offset_ref - fold.offset_span, fold.offset_ref + fold.offset_span):
-        miss = np.abs(np.asarray(R.log_likelihood(got.T, o, fold.sigma_ref, x.size, np.sum(d)))
-                      - np.asarray(R.log_likelihood(want.T, o, fold.sigma_ref, x.size,
+        miss = np.abs(np.asarray(residual_fold.log_likelihood(got.T, o, fold.sigma_ref, x.size, np.sum(d)))
+                      - np.asarray(residual_fold.log_likelihood(want.T, o, fold.sigma_ref, x.size,
                                                     np.sum(d))))
-        assert np.all(miss[usable] <= R.TOL)
+        assert np.all(miss[usable] <= residual_fold.TOL)
     assert np.array_equal(got[~usable], want[~usable])
 

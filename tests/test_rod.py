@@ -2,7 +2,7 @@
 
 Reference: an independent scipy solution of the Pochhammer-Chree equation in its classical
 complex form (scipy.special.jv of complex argument, brentq in k), not the real-continued
-series of models.rod.
+series of models.scene.rod.
 """
 
 import math
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import optimize, special
 
-from beadrod.models import rod
+from beadrod.models.scene import rod
 
 STEEL = dict(young=200e9, poisson=0.27, density=7700.0)
 PMMA = dict(young=3.3e9, poisson=0.37, density=1190.0)

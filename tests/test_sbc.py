@@ -8,17 +8,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from beadrod.inference.likelihood import design_inputs
-from beadrod.inference.numpyro_models import ModelSpec
-from beadrod.inference.sbc import (
+from beadrod.inference.evidence.sbc import (
     SBCResult,
     dkw_halfwidth,
     ecdf_difference,
     run_sbc,
     uniformity_pvalue,
 )
-from beadrod.models.scenes import builtin_scene
-from beadrod.workflows.sbc_outputs import plot_ecdf, write_sbc_json
+from beadrod.inference.model.likelihood import design_inputs
+from beadrod.inference.model.numpyro_models import ModelSpec
+from beadrod.models.scene import builtin_scene
+from beadrod.workflows.pipeline.sbc_outputs import plot_ecdf, write_sbc_json
 
 SCENE = builtin_scene("paper")  # the paper's bead on its rod
 SPEC = ModelSpec("viscoelastic", rung="paper_eq25")

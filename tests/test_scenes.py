@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from beadrod.models import scenes
-from beadrod.models.scenes import SceneError
+from beadrod.models import scene
+from beadrod.models.scene import SceneError
 
 PAPER_R, PAPER_RHO, G = 7.938e-3, 7700.0, 9.80665
 
@@ -44,16 +44,16 @@ displacement_per_volt_m_V = 1e-9
 
 
 def test_builtins_exist_and_round_trip():
-    names = scenes.builtin_scene_names()
+    names = scene.builtin_scene_names()
     assert {"paper", "strong_drive", "large_soft_bead", "micro_bead"} <= set(names)
     for n in names:
-        s = scenes.builtin_scene(n)
+        s = scene.builtin_scene(n)
         assert s.name == n
-        assert scenes.scene_from_dict(scenes.scene_to_dict(s), n) == s
+        assert scene.scene_from_dict(scene.scene_to_dict(s), n) == s
 
 
 def test_paper_derived_properties_closed_form():
-    s = scenes.builtin_scene("paper")
+    s = scene.builtin_scene("paper")
     m = 4 / 3 * math.pi * PAPER_R**3 * PAPER_RHO
     assert s.mass == pytest.approx(m, rel=1e-14)
     assert s.weight == pytest.approx(m * G, rel=1e-14)
@@ -73,13 +73,13 @@ def test_two_materials_and_extra_force(tmp_path):
     text = BASE.replace('material = "steel"\n[surfaces]', 'material = "pmma"\n[surfaces]')
     text += ("[materials.pmma]\nyoung_Pa = 3.3e9\npoisson = 0.37\ndensity_kg_m3 = 1190\n"
              "[preload]\nextra_force_N = 0.5\n")
-    s = scenes.load_scene(_toml(tmp_path, text))
+    s = scene.load_scene(_toml(tmp_path, text))
     es = 1 / ((1 - 0.27**2) / 200e9 + (1 - 0.37**2) / 3.3e9)
     assert s.e_star == pytest.approx(es, rel=1e-14)
     assert s.load == pytest.approx(s.weight + 0.5)
     assert s.rod_material.name == "pmma"
     assert s.with_young(100e9).rod_material.young == 3.3e9  # different material: unchanged
-    assert scenes.scene_from_dict(scenes.scene_to_dict(s)) == s
+    assert scene.scene_from_dict(scene.scene_to_dict(s)) == s
 
 
 @pytest.mark.parametrize("old,new,needle", [
@@ -97,25 +97,25 @@ def test_errors_name_file_and_key(tmp_path, old, new, needle):
     assert old in BASE
     p = _toml(tmp_path, BASE.replace(old, new, 1), "bad_scene.toml")
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(p)
+        scene.load_scene(p)
     assert "bad_scene.toml" in str(exc.value)
     assert needle in str(exc.value)
 
 
 def test_bad_toml_and_missing_file(tmp_path):
     with pytest.raises(SceneError, match="not valid TOML"):
-        scenes.load_scene(_toml(tmp_path, "name = ", "broken.toml"))
+        scene.load_scene(_toml(tmp_path, "name = ", "broken.toml"))
     with pytest.raises(SceneError, match="no such scene file"):
-        scenes.load_scene(tmp_path / "nope.toml")
+        scene.load_scene(tmp_path / "nope.toml")
     with pytest.raises(SceneError, match="did you mean 'paper'"):
-        scenes.builtin_scene("papr")
+        scene.builtin_scene("papr")
 
 
 def _run_cli(argv, capsys):
-    from beadrod.workflows import cmd_scene
+    from beadrod.workflows.commands import scene
 
     parser = argparse.ArgumentParser()
-    cmd_scene.register(parser.add_subparsers())
+    scene.register(parser.add_subparsers())
     args = parser.parse_args(argv)
     rc = args.func(args)
     return rc, capsys.readouterr().out
@@ -154,7 +154,7 @@ def test_scene_command_covers_every_registered_law_at_nominal_values(capsys):
     sqrt R))^(2/3); F = C delta^n: K0 = n F0/delta0), with --param for the exponent."""
     import dataclasses
 
-    from beadrod.models import hertz
+    from beadrod.models.laws import hertz
     from beadrod.models.registry import law_names, register, unregister
 
     copy = dataclasses.replace(hertz.LAW, name="hertz_copy_scene_test", label="Hertz copy",
@@ -217,7 +217,7 @@ def test_values_outside_physical_bounds(tmp_path, old, new, key):
     assert old in BASE
     p = _toml(tmp_path, BASE.replace(old, new, 1), "absurd.toml")
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(p)
+        scene.load_scene(p)
     msg = str(exc.value)
     assert msg.count(str(p)) == 1 and key in msg and "physical bounds" in msg, msg
 
@@ -225,15 +225,15 @@ def test_values_outside_physical_bounds(tmp_path, old, new, key):
 def test_every_builtin_lies_within_the_bounds():
     # the bounds are checked on load, so loading is the test; the margins show they are
     # not drawn tight around the shipped scenes
-    for n in scenes.builtin_scene_names():
-        d = scenes.scene_to_dict(scenes.builtin_scene(n))
+    for n in scene.builtin_scene_names():
+        d = scene.scene_to_dict(scene.builtin_scene(n))
         assert 1e-9 < d["bead"]["radius_m"] < 10.0
         assert 0 < d["drive"]["voltage_max_V"] <= 1e4
 
 
 def test_scene_path_that_is_a_folder(tmp_path, capsys):
     with pytest.raises(SceneError, match="is a folder"):
-        scenes.load_scene(tmp_path)
+        scene.load_scene(tmp_path)
     from beadrod.workflows.cli import main
 
     assert main(["scene", str(tmp_path)]) == 2
@@ -246,7 +246,7 @@ def test_scene_file_that_is_not_text(tmp_path):
     p = tmp_path / "binary.toml"
     p.write_bytes(b"name = \"\xff\xfe\"\n")
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(p)
+        scene.load_scene(p)
     assert str(exc.value).count(str(p)) == 1
 
 
@@ -269,7 +269,7 @@ def test_scene_values_of_the_wrong_type(tmp_path, old, new, needle):
     assert old in BASE
     p = _toml(tmp_path, BASE.replace(old, new, 1), "typed.toml")
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(p)
+        scene.load_scene(p)
     msg = str(exc.value)
     assert needle in msg and "\n" not in msg and len(msg) < 400, msg
 
@@ -279,24 +279,24 @@ def test_scene_quality_factor_of_one_half_is_refused(tmp_path):
                         "surface_energy_J_m2 = 0.7\nquality_factor = 0.5")
     with pytest.raises(SceneError, match=r"'quality_factor' = 0\.5 lies outside the physical "
                                          r"bounds \(0\.5, 100000\] \(above 1/2"):
-        scenes.load_scene(_toml(tmp_path, text))
+        scene.load_scene(_toml(tmp_path, text))
     ok = text.replace("quality_factor = 0.5", "quality_factor = 0.51")
-    assert scenes.load_scene(_toml(tmp_path, ok, "ok.toml")).quality_factor == 0.51
+    assert scene.load_scene(_toml(tmp_path, ok, "ok.toml")).quality_factor == 0.51
 
 
 @pytest.mark.parametrize("value", ["[1, 1e300]", "[1, 2e11]", "[1e11, 1e13]"])
 def test_scene_young_range_is_bounds_checked(tmp_path, value):
     text = BASE.replace('name = "t"', f'name = "t"\nyoung_range_Pa = {value}')
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(_toml(tmp_path, text))
+        scene.load_scene(_toml(tmp_path, text))
     assert "'young_range_Pa'" in str(exc.value) and "[1000, 1.2e+12]" in str(exc.value)
 
 
 def test_scene_with_a_byte_order_mark_loads_as_without(tmp_path):
-    plain = scenes.load_scene(_toml(tmp_path, BASE, "plain.toml"))
+    plain = scene.load_scene(_toml(tmp_path, BASE, "plain.toml"))
     p = tmp_path / "bom.toml"
     p.write_bytes(b"\xef\xbb\xbf" + BASE.encode())
-    assert scenes.load_scene(p) == plain
+    assert scene.load_scene(p) == plain
 
 
 @pytest.mark.parametrize("text", ["a = " + "[" * 5000 + "]" * 5000,
@@ -304,7 +304,7 @@ def test_scene_with_a_byte_order_mark_loads_as_without(tmp_path):
 def test_scene_nested_too_deeply_is_one_line(tmp_path, text):
     p = _toml(tmp_path, text, "deep.toml")
     with pytest.raises(SceneError) as exc:
-        scenes.load_scene(p)
+        scene.load_scene(p)
     msg = str(exc.value)
     assert msg.startswith(str(p)) and "nested too deeply" in msg and "\n" not in msg
 

@@ -1,5 +1,5 @@
 """The tabulated backbones of JKR, DMT and the Greenwood-Williamson sphere
-(models.shape_tables) against the generic exact backbone of each law's force, their
+(models.tables.shape_build) against the generic exact backbone of each law's force, their
 one-parameter structure (E* drops out), and their Hertz limits (gamma -> 0, sigma -> 0)."""
 
 import jax
@@ -7,12 +7,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import backbone, generic, registry, shape_backbone, shape_tables, surrogate
+from beadrod.models import registry
+from beadrod.models.ladder import backbone, generic
+from beadrod.models.tables import shape_build, shape_read, surrogate
 
 SCENE = {"radius": 7.938e-3, "young": 200e9, "poisson": 0.27, "load": 0.1582,
          "mass": 0.01613, "gravity": 9.81, "roughness_rms": 25e-9, "surface_energy": 0.7}
 X = jnp.array([0.05, 0.4, 0.85, 1.1, 1.6])
-GW_TABLE_ERROR = 3e-5   # the Greenwood-Williamson table's stated error (models.shape_tables)
+GW_TABLE_ERROR = 3e-5   # the Greenwood-Williamson table's stated error (models.tables.shape_build)
 MD_TABLE_ERROR = 1e-5   # the Maugis-Dugdale table's, away from its contact-loss corner
 
 
@@ -57,7 +59,7 @@ def test_table_against_generic_exact_backbone(name, theta):
                                       ("maugis_dugdale", 0.1), ("maugis_dugdale", 1.0),
                                       ("maugis_dugdale", 100.0)])
 def test_adhesive_tables_follow_the_corner_at_contact_loss(name, lam):
-    """Where the force jumps at the contact edge, S(x) has a corner at x_c (models.surrogate,
+    """Where the force jumps at the contact edge, S(x) has a corner at x_c (models.tables.surrogate,
     kink_c1=False): the table against the exact backbone from 0.02 before to 0.1 past the
     corner, F0/Fc 0.3-1000 (Maugis-Dugdale at lambda across its range). Stated error 1e-4
     in the 0.01 past x_c (measured 5e-5, largest near F0/Fc = 20), 1e-5 elsewhere (measured
@@ -65,17 +67,17 @@ def test_adhesive_tables_follow_the_corner_at_contact_loss(name, lam):
     d = np.array([-0.02, -0.003, -3e-4, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1])
     r = np.array([0.3, 0.6, 1.5, 5.0, 20.0, 100.0, 1000.0])
     two = lam is not None
-    xc, _ = (shape_tables.spec(name).kink(np.log(r), np.full(r.shape, np.log(lam))) if two
-             else shape_tables.spec(name).kink(np.log(r)))
+    xc, _ = (shape_build.spec(name).kink(np.log(r), np.full(r.shape, np.log(lam))) if two
+             else shape_build.spec(name).kink(np.log(r)))
     x = xc[:, None] + d[None, :]
     rr = np.broadcast_to(r[:, None], x.shape)
     if two:
-        fast = np.array([float(shape_tables.backbone_fast(name, a, b, lam))
+        fast = np.array([float(shape_build.backbone_fast(name, a, b, lam))
                          for a, b in zip(x.ravel(), rr.ravel())]).reshape(x.shape)
-        exact = np.asarray(shape_tables.exact_backbone(name, x, rr, t=lam))
+        exact = np.asarray(shape_build.exact_backbone(name, x, rr, t=lam))
     else:
-        fast = np.asarray(shape_tables.backbone_fast(name, x, rr))
-        exact = np.asarray(shape_tables.exact_backbone(name, x, rr))
+        fast = np.asarray(shape_build.backbone_fast(name, x, rr))
+        exact = np.asarray(shape_build.exact_backbone(name, x, rr))
     err = np.abs(fast - exact)
     window = (d > 0) & (d <= 0.01)
     assert err[:, window].max() < 1e-4, err
@@ -84,19 +86,19 @@ def test_adhesive_tables_follow_the_corner_at_contact_loss(name, lam):
 
 @pytest.mark.slow
 def test_greenwood_williamson_table_error_over_its_range():
-    """The stated error of the table (models.shape_tables) over D0' = delta0'/sigma in
+    """The stated error of the table (models.tables.shape_build) over D0' = delta0'/sigma in
     [1.5, 1e4]: both sides of each piece break, the knee D0 ~ -1, the prior region and
     the Hertz end, at amplitudes from the Lindstedt range through contact loss to x = 2."""
     s = np.array([1.5, 2.7, 3.99, 4.01, 5.5, 7.0, 9.0, 15.9, 16.1, 60.0, 900.0, 1e4])
     x = np.array([0.05, 0.4, 0.7, 0.85, 0.95, 1.1, 1.6, 2.0])
     xx, ss = np.meshgrid(x, s, indexing="ij")
-    exact = np.asarray(shape_tables.exact_backbone("greenwood_williamson", xx, ss))
-    fast = np.asarray(shape_tables.backbone_fast("greenwood_williamson", xx, ss))
+    exact = np.asarray(shape_build.exact_backbone("greenwood_williamson", xx, ss))
+    fast = np.asarray(shape_build.backbone_fast("greenwood_williamson", xx, ss))
     assert np.max(np.abs(fast - exact)) <= GW_TABLE_ERROR, np.abs(fast - exact).max(axis=0)
 
 
 def _hertz_onset():
-    """Hertz's contact-loss onset from its closed-form potential (models.backbone):
+    """Hertz's contact-loss onset from its closed-form potential (models.ladder.backbone):
     P(qc) = P(-1) = 1/(n + 1), n = 3/2, solved by brentq."""
     from scipy.optimize import brentq
 
@@ -111,9 +113,9 @@ def test_contact_loss_onset_is_the_limit_of_the_orbits_either_side():
     the wrong branch (x_c 0.22 for 0.56, 0.84 for 0.92): the onset lies between the orbits
     1e-4 either side of qmax_c (contact-only below, flying above), and tends to Hertz's
     closed-form onset as D0' grows (sigma/delta0 -> 0)."""
-    spec = shape_tables.spec("greenwood_williamson")
+    spec = shape_build.spec("greenwood_williamson")
     xc, sc = spec.kink(np.log(np.array([4.19, 4.85, 4801.1, 5560.0])))
-    ref = shape_tables.TABLES["greenwood_williamson"].reference_kw
+    ref = shape_build.TABLES["greenwood_williamson"].reference_kw
     gw_law = registry.get_law("greenwood_williamson")
     for i, s in enumerate((4.19, 4.85, 4801.1, 5560.0)):
         kw = ref(s)
@@ -129,13 +131,13 @@ def test_contact_loss_onset_is_the_limit_of_the_orbits_either_side():
 
 
 def test_pieced_surrogate_reproduces_a_known_backbone():
-    """models.surrogate with p_breaks: a C1 closed-form S(x, p) (kink at x_c(p)) is
+    """models.tables.surrogate with p_breaks: a C1 closed-form S(x, p) (kink at x_c(p)) is
     reproduced to 1e-9 on both sides of each break, scalar and vector p agree, the break's
     jump is below that error and gradients are finite there; without breaks the table
     has no 'p_edges' (the single-interpolant tables are unchanged)."""
     import jax
 
-    from beadrod.models import surrogate
+    from beadrod.models.tables import surrogate
 
     def s_exact(x, p):
         xc, k = 0.8 + 0.05 * np.sin(p), -0.1 * (1.0 + 0.1 * p)
@@ -231,17 +233,17 @@ def test_tables_are_finite_with_finite_gradients_over_the_prior_region():
 
             g = jax.grad(total, argnums=(0, 1))(jnp.array([0.0, 0.5, 1.0, 1.9, 2.5]), v)
             assert all(np.all(np.isfinite(np.asarray(a))) for a in g), (name, v)
-    assert set(shape_tables.TABLES) == {"jkr", "dmt", "greenwood_williamson", "maugis_dugdale"}
+    assert set(shape_build.TABLES) == {"jkr", "dmt", "greenwood_williamson", "maugis_dugdale"}
 
 
 def test_tables_tend_to_the_hertz_table_as_adhesion_vanishes():
     """The JKR and DMT tables approach the Hertz backbone table as gamma -> 0 (r = F0/Fc
     grows), monotonically, to within 2e-3 at the table's end (r = 1000)."""
-    from beadrod.models.backbone_table import backbone_shift_fast
+    from beadrod.models.tables.powerlaw_backbone import backbone_shift_fast
 
     hertz = np.asarray(backbone_shift_fast(X, 1.5))
     for name in ("jkr", "dmt"):
-        gaps = [np.max(np.abs(np.asarray(shape_tables.backbone_fast(name, X, r)) - hertz))
+        gaps = [np.max(np.abs(np.asarray(shape_build.backbone_fast(name, X, r)) - hertz))
                 for r in (1.0, 10.0, 100.0, 1000.0)]
         assert all(b < a for a, b in zip(gaps, gaps[1:])), (name, gaps)
         assert gaps[-1] < 2e-3, (name, gaps)
@@ -253,7 +255,7 @@ def test_greenwood_williamson_table_is_continuous_across_its_piece_breaks():
     import jax
 
     x = jnp.array([0.05, 0.4, 0.85, 0.95, 1.6])
-    f = lambda s: shape_tables.backbone_fast("greenwood_williamson", x, s)
+    f = lambda s: shape_build.backbone_fast("greenwood_williamson", x, s)
     for s in (4.0, 16.0):
         lo, hi = f(s * (1.0 - 1e-12)), f(s * (1.0 + 1e-12))
         assert float(jnp.max(jnp.abs(hi - lo))) < GW_TABLE_ERROR, (s, hi - lo)
@@ -262,12 +264,12 @@ def test_greenwood_williamson_table_is_continuous_across_its_piece_breaks():
 
 
 def test_hermite_cells_in_p_against_the_chebyshev_interpolant():
-    """models.p_cells: the rough sphere's table on cubic Hermite cells in p (how a fit
+    """models.tables.hermite_cells: the rough sphere's table on cubic Hermite cells in p (how a fit
     evaluates it) against the same table's Chebyshev interpolant, over its whole range
     (20,000 random points, x in [0, x_max]): values within 1e-6 (the module's stated bound,
     measured 2.2e-7; the table's own error is 3e-5), both gradients within 1e-4 (measured
     8.7e-6 in x, 2.4e-5 in p, against slopes up to 1.3); one point alone as the batch."""
-    table = shape_backbone.load_table("greenwood_williamson")
+    table = shape_read.load_table("greenwood_williamson")
     chebyshev = {k: v for k, v in table.items() if k != "p_cells" and not k.startswith("_")}
     lo, hi = (float(v) for v in table["p_range"])
     rng = np.random.default_rng(7)

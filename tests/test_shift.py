@@ -1,4 +1,4 @@
-"""models/shift.py: first-order shift against mpmath/scipy references and the paper's claims."""
+"""models/ladder/first_order.py: first-order shift against mpmath/scipy references and the paper's claims."""
 
 import jax
 import jax.numpy as jnp
@@ -9,8 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from beadrod.models._hyp import NEG_INF_GRAD
-from beadrod.models.shift import (
+from beadrod.models.ladder.first_order import (
     complete_elliptic,
     first_order_from_stiffness,
     first_order_hertz,
@@ -18,6 +17,7 @@ from beadrod.models.shift import (
     max_shift_powerlaw,
     without_first_order,
 )
+from beadrod.models.ladder.hypergeometric import NEG_INF_GRAD
 
 mp.mp.dps = 30
 

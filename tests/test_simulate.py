@@ -1,4 +1,4 @@
-"""The scene simulator (models/simulate.py) against independent references."""
+"""The scene simulator (models/scene/simulate.py) against independent references."""
 
 import dataclasses
 
@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from beadrod.models import hbm, ladder
-from beadrod.models.scenes import builtin_scene
-from beadrod.models.simulate import PlasticityError, build_simulator
+from beadrod.models.ladder import harmonic_balance, powerlaw_ladder
+from beadrod.models.scene import builtin_scene
+from beadrod.models.scene.simulate import PlasticityError, build_simulator
 
 
 def _hertz_scene(q=50.0):
@@ -24,7 +24,7 @@ def test_hertz_with_losses_reproduces_ladder_rung4():
     assert sim.law_name == "Hertz" and sim.dyn.rho.shape == (0,)
     x = 0.5
     got = sim.peak(x * sim.delta0, bead=False)["shift"]
-    r = ladder.rung4_hbm(np.array([x, 1e-3]), q_factor=50.0, harmonics=3)
+    r = powerlaw_ladder.rung4_hbm(np.array([x, 1e-3]), q_factor=50.0, harmonics=3)
     assert got == pytest.approx((1 + r[0]) / (1 + r[1]) - 1, rel=1e-6)
     assert got < -0.01     # and it is a real softening, not a trivial zero
 
@@ -99,10 +99,10 @@ def test_peak_past_contact_loss_is_the_least_drive_peak():
     law, h, n = sim.dyn.law, sim.harmonics, sim.n_time
 
     @jax.jit
-    def drive_for(x, om, v0):   # models.hbm (no rod): (X, E) with overlap amplitude x at om
+    def drive_for(x, om, v0):   # models.ladder.harmonic_balance (no rod): (X, E) with overlap amplitude x at om
         def fun(v):
-            return jnp.append(hbm.residual(v[:-1], om, v[-1], law, h, n),
-                              hbm.amplitude(v[:-1]) - x)
+            return jnp.append(harmonic_balance.residual(v[:-1], om, v[-1], law, h, n),
+                              harmonic_balance.amplitude(v[:-1]) - x)
         v = jax.lax.fori_loop(0, 40, lambda _, v: v - jnp.linalg.solve(jax.jacfwd(fun)(v),
                                                                        fun(v)), v0)
         return v, jnp.max(jnp.abs(fun(v)))

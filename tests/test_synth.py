@@ -43,7 +43,7 @@ def test_paper_like_structure(world):
 def test_shift_follows_paper_eq25(world):
     import jax.numpy as jnp
 
-    from beadrod.models.viscoelastic import shift_paper_eq25
+    from beadrod.models.laws.viscoelastic import shift_paper_eq25
 
     _, _, truth = world
     obs = truth["observables"]["drive"]
@@ -89,10 +89,10 @@ def test_round_trip_recovers_truth(tmp_path, world):
 
 
 def test_simulate_regenerates_embedded_folder_bit_for_bit(tmp_path):
-    from beadrod.workflows import cmd_simulate
+    from beadrod.workflows.commands import simulate
 
     parser = argparse.ArgumentParser()
-    cmd_simulate.register(parser.add_subparsers())
+    simulate.register(parser.add_subparsers())
     args = parser.parse_args(["simulate", "--world", "paper_like", "--out",
                               str(tmp_path / "pl"), "--seed", str(DEFAULT_SEED)])
     assert args.func(args) == 0
@@ -110,10 +110,10 @@ def test_different_seed_differs(world):
 @pytest.fixture(scope="module")
 def hertz_world(tmp_path_factory):
     folder = tmp_path_factory.mktemp("hd")
-    from beadrod.workflows import cmd_simulate
+    from beadrod.workflows.commands import simulate
 
     parser = argparse.ArgumentParser()
-    cmd_simulate.register(parser.add_subparsers())
+    simulate.register(parser.add_subparsers())
     args = parser.parse_args(["simulate", "--world", "hertz_dynamics", "--out", str(folder),
                               "--seed", str(DEFAULT_SEED)])
     assert args.func(args) == 0
@@ -129,7 +129,7 @@ def test_hertz_dynamics_bit_for_bit(hertz_world):
 
 @pytest.mark.slow
 def test_hertz_dynamics_round_trip_and_physics(hertz_world):
-    from beadrod.models.backbone import backbone_shift
+    from beadrod.models.ladder.backbone import backbone_shift
 
     ds = load_dataset(hertz_world)
     p = process(ds)

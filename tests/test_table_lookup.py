@@ -1,6 +1,6 @@
 """The table lookups' fast evaluation: the Chebyshev basis from powers, the closed-form
-knot location, the patches of a two-coordinate table (models.pq_patches) and the
-derivatives written by hand (models.scalar_shape, models.p_cells, models.pq_patches), each
+knot location, the patches of a two-coordinate table (models.tables.patches_2d) and the
+derivatives written by hand (models.tables.one_shape, models.tables.hermite_cells, models.tables.patches_2d), each
 against an independent reference (numpy's Clenshaw sums, finite differences)."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from numpy.polynomial import chebyshev as npcheb
 
-from beadrod.models import backbone_table, chebyshev, p_cells, pq_patches, surrogate
-from beadrod.models.shape_backbone import load_table
+from beadrod.models.tables import chebyshev, hermite_cells, patches_2d, powerlaw_backbone, surrogate
+from beadrod.models.tables.shape_read import load_table
 
 
 @pytest.mark.parametrize("m", [2, 8, 16, 24])
@@ -39,7 +39,7 @@ def test_basis_above_max_terms_uses_the_recurrence():
 def _tables():
     pre = lambda n: n - 1.0  # noqa: E731 - the power law's prefactor
     return [("jkr", load_table("jkr"), None), ("dmt", load_table("dmt"), None),
-            ("powerlaw", backbone_table.load_table(), pre),
+            ("powerlaw", powerlaw_backbone.load_table(), pre),
             ("greenwood_williamson", load_table("greenwood_williamson"), None)]
 
 
@@ -83,7 +83,7 @@ def test_knots_not_graded_as_built_are_refused():
     table = dict(load_table("jkr"))
     table["u_knots"] = np.linspace(0.0, 1.0, table["u_knots"].size)
     with pytest.raises(ValueError, match="u knots"):
-        p_cells.amplitude_cell(table, jnp.asarray([0.5]), jnp.asarray(1.0))
+        hermite_cells.amplitude_cell(table, jnp.asarray([0.5]), jnp.asarray(1.0))
 
 
 def _global_interpolant(table, x, p, q):
@@ -112,7 +112,7 @@ def _global_interpolant(table, x, p, q):
 
 
 def test_patches_against_the_global_interpolant():
-    """models.pq_patches: Maugis-Dugdale's table on its (p, q) patches (how a fit reads
+    """models.tables.patches_2d: Maugis-Dugdale's table on its (p, q) patches (how a fit reads
     it) against its global Chebyshev interpolant, 3000 random points over the whole
     table and 1000 within 1e-3 of the contact-loss corner on either side: within the
     module's stated ERROR (measured 4.3e-7; the table's own error is 1e-5)."""
@@ -123,12 +123,12 @@ def test_patches_against_the_global_interpolant():
     p, q = rng.uniform(*table["p_range"], n), rng.uniform(*table["q_range"], n)
     one = jax.jit(jax.vmap(lambda a, b, c: surrogate.evaluate(table, a, b, q=c)))
     ref, _ = _global_interpolant(table, x, p, q)
-    assert np.max(np.abs(np.asarray(one(x, p, q)) - ref)) <= pq_patches.ERROR
+    assert np.max(np.abs(np.asarray(one(x, p, q)) - ref)) <= patches_2d.ERROR
     xc = np.array([_global_interpolant(table, np.ones(1), p[k:k + 1], q[k:k + 1])[1]
                    for k in range(1000)])
     xk = np.clip(xc + rng.uniform(-1e-3, 1e-3, 1000), 0.0, float(table["x_max"]))
     ref, _ = _global_interpolant(table, xk, p[:1000], q[:1000])
-    assert np.max(np.abs(np.asarray(one(xk, p[:1000], q[:1000])) - ref)) <= pq_patches.ERROR
+    assert np.max(np.abs(np.asarray(one(xk, p[:1000], q[:1000])) - ref)) <= patches_2d.ERROR
 
 
 def test_patch_derivatives_against_finite_differences():
@@ -141,7 +141,7 @@ def test_patch_derivatives_against_finite_differences():
     x = jnp.asarray(rng.uniform(0.02, 1.95, 40))
     f = lambda xx, pp, qq: surrogate.evaluate(table, xx, pp, q=qq)  # noqa: E731
     g = jax.grad(lambda xx, pp, qq: jnp.sum(f(xx, pp, qq)), (0, 1, 2))
-    edge_p = p_lo + (p_hi - p_lo) * 5 / pq_patches.P_PATCHES + 1e-3   # just past an edge
+    edge_p = p_lo + (p_hi - p_lo) * 5 / patches_2d.P_PATCHES + 1e-3   # just past an edge
     h = 1e-6
     for p, q in ((rng.uniform(p_lo, p_hi), rng.uniform(q_lo, q_hi)), (edge_p, 0.3)):
         p, q = jnp.asarray(p), jnp.asarray(q)
@@ -164,4 +164,4 @@ def test_patches_refuse_a_table_with_pieces_in_p():
     table = {k: v for k, v in load_table("maugis_dugdale").items() if not k.startswith("_")}
     table["p_edges"] = np.asarray([*table["p_range"][:1], 0.0, *table["p_range"][1:]])
     with pytest.raises(ValueError, match="pieces in p"):
-        pq_patches.resample(table)
+        patches_2d.resample(table)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from beadrod.inference.tension import analyse_tension, log10_gap, ppc_failure, prob_greater
+from beadrod.inference.evidence.tension import analyse_tension, log10_gap, ppc_failure, prob_greater
 
 
 def test_prob_greater_closed_form():
@@ -91,9 +91,9 @@ def test_workflow_uses_the_inference_tension_path():
     """compare_outputs keeps no statistics of its own: it calls analyse_tension."""
     import inspect
 
-    from beadrod.workflows import compare_outputs
+    from beadrod.workflows.pipeline import outputs
 
-    src = inspect.getsource(compare_outputs)
+    src = inspect.getsource(outputs)
     assert "analyse_tension(" in src
     for dup in ("def ppc_failure", "def prob_greater", "bhattacharyya", "p_value"):
         assert dup not in src, dup
@@ -103,11 +103,11 @@ def test_workflow_uses_the_inference_tension_path():
 def test_tension_on_synthetic_paper_like_data():
     """Data built with a shift-eta of 1e6 Pa s (paper Eq. 25) but Q from 1e5 Pa s: the
     analysis must see two viscosities (gap excluding 0, split preferred)."""
-    from beadrod.inference.bridge import bridge_sampling_log_z
-    from beadrod.inference.likelihood import design_inputs, simulate
-    from beadrod.inference.numpyro_models import ModelSpec, build_model
-    from beadrod.inference.sample import run_nuts
-    from beadrod.models.scenes import builtin_scene
+    from beadrod.inference.evidence.bridge import bridge_sampling_log_z
+    from beadrod.inference.model.likelihood import design_inputs, simulate
+    from beadrod.inference.model.numpyro_models import ModelSpec, build_model
+    from beadrod.inference.sampling.sample import run_nuts
+    from beadrod.models.scene import builtin_scene
 
     des = design_inputs(builtin_scene("paper"), n_protocols=6, amplitudes=np.linspace(5e-9, 40e-9, 6))
     base = {"law": "viscoelastic", "rung": "paper_eq25"}

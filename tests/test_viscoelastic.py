@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from beadrod.models import viscoelastic as ve
+from beadrod.models.laws import viscoelastic
 
 # The paper's setup (Secs. 2, 4.1): steel bead r = 7.938 mm, rho = 7700, nu = 0.27.
 R_BEAD, RHO, NU, G = 7.938e-3, 7700.0, 0.27, 9.80665
@@ -36,34 +36,34 @@ def a_paper(eta, young, nu):
 # --- paper numbers --------------------------------------------------------------------------
 
 def test_damping_constant_paper_value():
-    a = float(ve.damping_constant(eta1=1.05e6, young=210e9, poisson=NU))
+    a = float(viscoelastic.damping_constant(eta1=1.05e6, young=210e9, poisson=NU))
     assert a == pytest.approx(a_paper(1.05e6, 210e9, NU), rel=1e-14)
     assert round(a, 6) == pytest.approx(1.1e-5)  # paper: A = 1.1e-5 (E = 210 GPa)
     # eta2 enters with (1 - 2nu)^2 only
-    a2 = float(ve.damping_constant(eta1=1.05e6, eta2=0.0, young=210e9, poisson=NU))
+    a2 = float(viscoelastic.damping_constant(eta1=1.05e6, eta2=0.0, young=210e9, poisson=NU))
     assert a2 == pytest.approx(1 / 210e9 * 1.27 / 0.73 * 4 / 3 * 1.05e6 * (1 - NU + NU**2))
 
 
 def test_q_paper_values():
     f0, d0, es = hertz_f0(210e9)
     w0 = 2 * math.pi * f0
-    a = float(ve.damping_constant(eta1=1.05e6, young=210e9, poisson=NU))
-    q = float(ve.linear_q(damping_constant=a, omega0=w0))
+    a = float(viscoelastic.damping_constant(eta1=1.05e6, young=210e9, poisson=NU))
+    q = float(viscoelastic.linear_q(damping_constant=a, omega0=w0))
     # paper Eq. 30 typed in: Q = omega0 m / (2 E* A (R delta0)^(1/2))
     q30 = w0 * MASS / (2 * es * a * math.sqrt(R_BEAD * d0))
     assert q == pytest.approx(q30, rel=1e-12)
     assert round(q) == 5  # paper: Q = 5 (5.32)
-    assert float(ve.linear_inverse_q(damping_constant=a, omega0=w0)) == pytest.approx(1 / q)
+    assert float(viscoelastic.linear_inverse_q(damping_constant=a, omega0=w0)) == pytest.approx(1 / q)
     # paper: Q = 20 <-> eta ~ 0.3 MPa s, Q = 100 <-> 55 kPa s
-    eta20 = float(ve.eta_from_q(20.0, omega0=w0, young=210e9, poisson=NU))
-    eta100 = float(ve.eta_from_q(100.0, omega0=w0, young=210e9, poisson=NU))
+    eta20 = float(viscoelastic.eta_from_q(20.0, omega0=w0, young=210e9, poisson=NU))
+    eta100 = float(viscoelastic.eta_from_q(100.0, omega0=w0, young=210e9, poisson=NU))
     assert round(eta20 / 1e6, 1) == 0.3  # 0.279 MPa s
     assert eta100 == pytest.approx(55e3, rel=0.02)  # 55.8 kPa s
     q55 = 1 / (w0 * a_paper(55e3, 210e9, NU))
     assert round(q55, -1) == 100  # 101.5
     assert 1 / (w0 * a_paper(0.3e6, 210e9, NU)) == pytest.approx(18.6, abs=0.05)  # rounds to 20
     # inverse maps invert
-    assert float(ve.eta_from_damping_constant(a, young=210e9, poisson=NU)) == pytest.approx(1.05e6)
+    assert float(viscoelastic.eta_from_damping_constant(a, young=210e9, poisson=NU)) == pytest.approx(1.05e6)
 
 
 def test_kuwabara_kono_cited_case():
@@ -73,8 +73,8 @@ def test_kuwabara_kono_cited_case():
     rad = r / 2  # 1/R = 1/r1 + 1/r2
     kn = 4 / 3 * es * math.sqrt(rad)
     assert kn == pytest.approx(1.17e10, rel=5e-3)  # paper k_n = 1.17e10: reproduced (1.1684e10)
-    a = ve.damping_constant(eta1=1.05e6, young=young, poisson=nu)
-    gn = float(ve.kuwabara_kono_gamma(e_star=es, radius=rad, damping_constant=a))
+    a = viscoelastic.damping_constant(eta1=1.05e6, young=young, poisson=nu)
+    gn = float(viscoelastic.kuwabara_kono_gamma(e_star=es, radius=rad, damping_constant=a))
     assert gn == pytest.approx(1.5 * a_paper(1.05e6, young, nu) * kn, rel=1e-12)
     # paper gamma_n = 7.8e4 is NOT reproduced: Eqs. 8-9 give 2.22e5 (x2.84); see docs.
     assert gn == pytest.approx(2.218e5, rel=1e-3)
@@ -88,37 +88,37 @@ def test_force_sign_and_clip():
     kn = 4 / 3 * es * math.sqrt(rad)
     d = 50e-9
     for v in (0.0, 1e-3, -1e-3):
-        f = float(ve.force(d, v, e_star=es, radius=rad, damping_constant=a))
+        f = float(viscoelastic.force(d, v, e_star=es, radius=rad, damping_constant=a))
         assert f == pytest.approx(kn * (d**1.5 + 1.5 * a * d**0.5 * v), rel=1e-13)
     # fast unloading: raw Eq. 8 goes tensile, the clipped variant does not
     v = -0.02
-    raw = float(ve.force(d, v, e_star=es, radius=rad, damping_constant=a))
+    raw = float(viscoelastic.force(d, v, e_star=es, radius=rad, damping_constant=a))
     assert raw < 0
-    assert float(ve.force(d, v, e_star=es, radius=rad, damping_constant=a, clip=True)) == 0.0
+    assert float(viscoelastic.force(d, v, e_star=es, radius=rad, damping_constant=a, clip=True)) == 0.0
     # contact lost
-    assert float(ve.force(-1e-9, 1.0, e_star=es, radius=rad, damping_constant=a)) == 0.0
+    assert float(viscoelastic.force(-1e-9, 1.0, e_star=es, radius=rad, damping_constant=a)) == 0.0
 
 
 def test_force_linearisation_gives_q():
     """dF/d(delta_dot) at (delta0, 0) = A K0, so m x'' + A K0 x' + K0 x = 0 (paper Eq. 29)."""
     f0, d0, es = hertz_f0(210e9)
     a = a_paper(1.05e6, 210e9, NU)
-    c = jax.grad(lambda v: ve.force(d0, v, e_star=es, radius=R_BEAD, damping_constant=a))(0.0)
+    c = jax.grad(lambda v: viscoelastic.force(d0, v, e_star=es, radius=R_BEAD, damping_constant=a))(0.0)
     k0 = 2 * es * math.sqrt(R_BEAD * d0)
     assert float(c) == pytest.approx(a * k0, rel=1e-12)
 
 
 def test_gradients_finite_at_zero_viscosity():
     def f(eta, d, v):
-        a = ve.damping_constant(eta1=eta, young=210e9, poisson=NU)
-        return ve.force(d, v, e_star=1.1e11, radius=R_BEAD, damping_constant=a, clip=True)
+        a = viscoelastic.damping_constant(eta1=eta, young=210e9, poisson=NU)
+        return viscoelastic.force(d, v, e_star=1.1e11, radius=R_BEAD, damping_constant=a, clip=True)
 
     for d in (0.0, 50e-9):
         g = jax.grad(f, argnums=(0, 1, 2))(0.0, d, 0.01)
         assert all(np.isfinite(float(x)) for x in g)
-    g = jax.grad(lambda a: ve.linear_inverse_q(damping_constant=a, omega0=1.7e4))(0.0)
+    g = jax.grad(lambda a: viscoelastic.linear_inverse_q(damping_constant=a, omega0=1.7e4))(0.0)
     assert float(g) == pytest.approx(1.7e4)
-    g = jax.grad(lambda eta: ve.eta_from_q(eta, omega0=1.7e4, young=2e11, poisson=NU))(20.0)
+    g = jax.grad(lambda eta: viscoelastic.eta_from_q(eta, omega0=1.7e4, young=2e11, poisson=NU))(20.0)
     assert np.isfinite(float(g))
 
 
@@ -229,8 +229,8 @@ def test_shift_first_order_is_hertz():
     for x in (0.1, 0.5, 1.0):
         ref = mp.quad(lambda t, x=x: mp.sqrt(1 + x * mp.sin(t)), [0, mp.pi, 3 * mp.pi / 2, 2 * mp.pi])
         ref = ref / (4 * mp.pi) - mp.mpf(1) / 2
-        assert float(ve.shift_first_order(x)) == pytest.approx(float(ref), abs=1e-12)
-    assert float(ve.shift_first_order(1.0)) == pytest.approx(-0.05, abs=0.005)
+        assert float(viscoelastic.shift_first_order(x)) == pytest.approx(float(ref), abs=1e-12)
+    assert float(viscoelastic.shift_first_order(1.0)) == pytest.approx(-0.05, abs=0.005)
 
 
 # --- the artefact: secant slopes on a uniform grid ------------------------------------------
@@ -248,7 +248,7 @@ def secant_extra(x, n_points):
 @pytest.mark.parametrize("x", [0.1, 0.5, 0.9, 0.99])
 def test_secant_artefact_reproduces_paper_term(x):
     a, w = 1.1e-5, 2 * math.pi * 2684.0
-    closed = float(ve.paper_eq25_extra(x, damping_constant=a, omega=w)) / (a * w)
+    closed = float(viscoelastic.paper_eq25_extra(x, damping_constant=a, omega=w)) / (a * w)
     assert closed == pytest.approx(-(math.sqrt(1 + x) - math.sqrt(1 - x)) / 4, rel=1e-14)
     for n in (4000, 40000):  # N divisible by 4: converges (O(1/N^2)) to the closed form
         assert secant_extra(x, n) == pytest.approx(closed, rel=2e-3 * (4000 / n) ** 2)
@@ -278,29 +278,29 @@ def test_paper_eq25_curve_and_grey_curve():
     f0, _, _ = hertz_f0(210e9)
     a, w = a_paper(1.05e6, 210e9, NU), 2 * math.pi * f0
     x = jnp.array([0.2, 0.6, 1.0, 1.5])
-    full = np.asarray(ve.shift_paper_eq25(x, damping_constant=a, omega=w))
-    hz = np.asarray(ve.shift_first_order(x))
+    full = np.asarray(viscoelastic.shift_paper_eq25(x, damping_constant=a, omega=w))
+    hz = np.asarray(viscoelastic.shift_first_order(x))
     extra = -(a * w / 4) * (np.sqrt(1 + np.asarray(x)) - np.sqrt(np.clip(1 - np.asarray(x), 0, None)))
     np.testing.assert_allclose(full, hz + extra, rtol=1e-13)
     assert full[2] == pytest.approx(-0.05 - 0.066, abs=0.004)  # Fig. 4 black dashed at x = 1
-    grey = np.asarray(ve.shift_paper_without_first_order(x, damping_constant=a, omega=w))
+    grey = np.asarray(viscoelastic.shift_paper_without_first_order(x, damping_constant=a, omega=w))
     np.testing.assert_allclose(grey, np.sqrt(1 + 2 * full) - 1, rtol=1e-13)
     # x > 1: sqrt(1 - x) clipped, value continuous at 1 and finite beyond
-    e = lambda xx: float(ve.paper_eq25_extra(xx, damping_constant=a, omega=w))
+    e = lambda xx: float(viscoelastic.paper_eq25_extra(xx, damping_constant=a, omega=w))
     assert e(1.0 + 1e-12) == pytest.approx(e(1.0), abs=1e-9)
     assert e(1.5) == pytest.approx(-(a * w / 4) * math.sqrt(2.5))
 
 
 def test_paper_eq25_gradients_finite():
-    f = lambda x, a, w: ve.shift_paper_eq25(x, damping_constant=a, omega=w)
+    f = lambda x, a, w: viscoelastic.shift_paper_eq25(x, damping_constant=a, omega=w)
     xs = jnp.array([0.0, 0.5, 1.0 - 1e-9, 1.3, 1.0])
     g = jax.jit(jax.vmap(jax.grad(f, argnums=(0, 1, 2)), in_axes=(0, None, None)))(xs, 1.1e-5, 1.7e4)
     g = np.stack([np.asarray(v) for v in g])
     assert np.all(np.isfinite(g[:, :4])), g
-    # at x = 1 exactly the Hertz part's true d/dx is -inf (models.shift); never NaN
+    # at x = 1 exactly the Hertz part's true d/dx is -inf (models.ladder.first_order); never NaN
     assert not np.any(np.isnan(g[:, 4]))
-    e = lambda x, a, w: ve.paper_eq25_extra(x, damping_constant=a, omega=w)
+    e = lambda x, a, w: viscoelastic.paper_eq25_extra(x, damping_constant=a, omega=w)
     assert all(np.isfinite(float(v)) for v in jax.grad(e, argnums=(0, 1, 2))(1.0, 1.1e-5, 1.7e4))
     # the true d/dx of sqrt(1 - x) diverges as x -> 1-: large but finite just below 1
-    g = jax.grad(lambda x: ve.paper_eq25_extra(x, damping_constant=1.1e-5, omega=1.7e4))
+    g = jax.grad(lambda x: viscoelastic.paper_eq25_extra(x, damping_constant=1.1e-5, omega=1.7e4))
     assert abs(float(g(1.0 - 1e-10))) > 1e2 * abs(float(g(0.5)))

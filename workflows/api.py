@@ -3,12 +3,12 @@
 ``beadrod.load_dataset``, ``worlds``, ``laws``, ``fit``, ``compare``, ``shift`` and
 ``simulate`` live here (``beadrod/__init__.py`` re-exports them lazily). The command line
 is a thin layer over the same code: ``beadrod compare`` and ``beadrod fit`` call
-``workflows.cmd_compare.run``, as :func:`compare` and :func:`fit` do (it fits into a
+``workflows.commands.compare.run``, as :func:`compare` and :func:`fit` do (it fits into a
 private folder and the report is written on request); ``beadrod simulate`` calls
 :func:`simulate`; ``beadrod shift`` and :func:`shift` both call
-``workflows.cmd_shift.shift_table``; ``beadrod laws`` and :func:`laws` both call
-``workflows.cmd_laws.describe_laws``. The keywords of :func:`compare` set the same
-configuration keys as the command's flags (``workflows.cmd_compare.FLAG_KEYS``) and are
+``workflows.commands.shift.shift_table``; ``beadrod laws`` and :func:`laws` both call
+``workflows.commands.laws.describe_laws``. The keywords of :func:`compare` set the same
+configuration keys as the command's flags (``workflows.commands.compare.FLAG_KEYS``) and are
 resolved and checked by the same ``workflows.config.resolve``.
 
 Importing this module imports neither JAX nor the models: each function first sets the
@@ -33,8 +33,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from . import runtime
-from .runtime import UserError
+from beadrod.workflows import runtime
+from beadrod.workflows.runtime import UserError
 
 if TYPE_CHECKING:
     import arviz as az
@@ -42,8 +42,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from beadrod.data.load import Dataset
-
-    from .comparison import Comparison
+    from beadrod.workflows.pipeline.run import Comparison
 
 __all__ = ["load_dataset", "worlds", "laws", "fit", "compare", "shift", "simulate",
            "ComparisonResult", "UserError", "KEYWORDS"]
@@ -67,7 +66,7 @@ def _entry(chains: int | None = None) -> None:
     Python: host devices for ``chains`` parallel chains (default: the configuration's
     default; XLA reads the count once, when JAX's backend starts, so the first call of a
     session decides), float64 and the persistent compilation cache."""
-    from .config import DEFAULTS
+    from beadrod.workflows.config import DEFAULTS
 
     n = DEFAULTS["sampling"]["chains"] if chains is None else chains
     runtime.host_devices(max(1, min(int(n), 8)))
@@ -174,7 +173,7 @@ def laws(law_files: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | 
     _entry()
     import pandas as pd
 
-    from .cmd_laws import describe_laws
+    from beadrod.workflows.commands.laws import describe_laws
 
     rows = describe_laws(_law_files(law_files))
     return pd.DataFrame([{"name": r["name"], "label": r["label"],
@@ -188,7 +187,7 @@ def laws(law_files: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | 
 
 def _flags(keywords: dict[str, Any]) -> dict[str, Any]:
     """The nested configuration dict the keywords set (None: not set), as
-    workflows.cmd_compare.flags builds it from the command's flags."""
+    workflows.commands.compare.flags builds it from the command's flags."""
     out: dict[str, Any] = {}
     for name, val in keywords.items():
         if val is None:
@@ -211,7 +210,7 @@ def _resolve(config: str | os.PathLike[str] | dict[str, Any] | None,
     """The run's configuration: the defaults, then ``config`` (a TOML file as
     ``--config`` reads it, or a nested dict of the same keys), then the keywords, checked
     by workflows.config.resolve as the command's flags are."""
-    from .config import ConfigError, merge, resolve
+    from beadrod.workflows.config import ConfigError, merge, resolve
 
     flags = _flags(keywords)
     try:
@@ -227,7 +226,7 @@ def _resolve(config: str | os.PathLike[str] | dict[str, Any] | None,
 
 
 def _failed_warning(comp: Comparison) -> None:
-    from .cmd_compare import failed_fits
+    from beadrod.workflows.commands.compare import failed_fits
 
     bad = failed_fits(comp.result)
     if bad:
@@ -276,7 +275,7 @@ def compare(data: Dataset | str | os.PathLike[str] | None = None,
         >>> res.table[["law", "log_z", "status"]]
         >>> res.report("beadrod-out")
     """
-    from .cmd_compare import run
+    from beadrod.workflows.commands.compare import run
 
     _not_while_bootstrapping()
     keywords = {"laws": laws, "rung": rung, "chains": chains, "warmup": warmup,
@@ -331,7 +330,7 @@ def fit(data: Dataset | str | os.PathLike[str] | None, law: str, *,
     """
     if "laws" in keywords:
         raise TypeError("fit() fits one law: give it as `law`, or call compare(laws=...)")
-    from .config import load_config, merge
+    from beadrod.workflows.config import load_config, merge
 
     config = keywords.pop("config", None)
     if config is not None and not isinstance(config, dict):
@@ -374,7 +373,7 @@ class ComparisonResult:
 
             import pandas as pd
 
-            from .report import comparison_table
+            from beadrod.workflows.report.document import comparison_table
 
             self._table = pd.read_csv(io.StringIO(comparison_table(self._comp.result)[1]))
         return self._table.copy()
@@ -437,9 +436,9 @@ class ComparisonResult:
             >>> (folder / "report.html").exists()
             True
         """
-        from . import comparison
-        from .outdir import check_out, release
-        from .progress import RunProgress
+        from beadrod.workflows.outdir import check_out, release
+        from beadrod.workflows.pipeline import run as comparison
+        from beadrod.workflows.progress import RunProgress
 
         _entry()
         out = Path(path)
@@ -469,8 +468,8 @@ class ComparisonResult:
             >>> figs["evidence"].savefig("evidence.png")
         """
         _entry()
-        from .compare_figures import draw_figures
-        from .plots import plt
+        from beadrod.workflows.figures.comparison import draw_figures
+        from beadrod.workflows.figures.gallery import plt
 
         figs: dict[str, Figure] = {}
 
@@ -488,9 +487,8 @@ def _copy_run(src: Path, out: Path) -> None:
     """Copy the fits of the run folder ``src`` into ``out`` (opened by check_out, whose
     manifest lists each copy); the log is appended to, as a run's log is."""
     from beadrod.data.io import atomic_path
-
-    from .outdir import LOCK_FILE, MANIFEST_FILE
-    from .runtime import LOG_FILE
+    from beadrod.workflows.outdir import LOCK_FILE, MANIFEST_FILE
+    from beadrod.workflows.runtime import LOG_FILE
 
     for base, dirs, files in os.walk(src):
         dirs.sort()
@@ -534,7 +532,7 @@ def shift(law: str, x: float | Sequence[float], *, rung: str = "first_order",
     import numpy as np
     import pandas as pd
 
-    from .cmd_shift import FLAGS, shift_table
+    from beadrod.workflows.commands.shift import FLAGS, shift_table
 
     flags = {k: params.pop(k, None) for k in FLAGS}
     xs = [float(v) for v in np.atleast_1d(np.asarray(x, dtype=float))]
@@ -569,8 +567,7 @@ def simulate(world: str = "paper_like", *, seed: int | None = None,
     from beadrod.data.load import MEASUREMENTS, SCENE, TRUTH
     from beadrod.data.load import load_dataset as load
     from beadrod.data.synth import DEFAULT_SEED, WORLDS, write_world
-
-    from .outdir import check_out, release
+    from beadrod.workflows.outdir import check_out, release
 
     if world not in WORLDS:
         raise UserError(f"unknown world '{world}'; choose from: "

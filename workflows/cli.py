@@ -21,23 +21,23 @@ import os
 import sys
 import traceback
 
-from . import runtime
-from .runtime import UserError, host_devices
+from beadrod.workflows import runtime
+from beadrod.workflows.runtime import UserError, host_devices
 
 __all__ = ["main", "build_parser", "host_devices", "COMMAND_MODULES", "UserError",
            "version_string", "EXIT_PIPE"]
 
 COMMAND_MODULES: tuple[str, ...] = (
-    "beadrod.workflows.cmd_compare",
-    "beadrod.workflows.cmd_laws",
-    "beadrod.workflows.cmd_rungs",
-    "beadrod.workflows.cmd_scene",
-    "beadrod.workflows.cmd_shift",
-    "beadrod.workflows.cmd_plan",
-    "beadrod.workflows.cmd_run_scene",
-    "beadrod.workflows.cmd_simulate",
-    "beadrod.workflows.cmd_validate",
-    "beadrod.workflows.cmd_bench",
+    "beadrod.workflows.commands.compare",
+    "beadrod.workflows.commands.laws",
+    "beadrod.workflows.commands.rungs",
+    "beadrod.workflows.commands.scene",
+    "beadrod.workflows.commands.shift",
+    "beadrod.workflows.commands.plan",
+    "beadrod.workflows.commands.sweep",
+    "beadrod.workflows.commands.simulate",
+    "beadrod.workflows.commands.validate",
+    "beadrod.workflows.commands.bench",
 )
 
 
@@ -69,9 +69,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     from beadrod.data.schema import DataError
     from beadrod.models.law import RungUnavailable
     from beadrod.models.lawfile import LawFileError
-    from beadrod.models.scenes import SceneError
-
-    from .config import ConfigError
+    from beadrod.models.scene import SceneError
+    from beadrod.workflows.config import ConfigError
 
     return (UserError, DataError, SceneError, ConfigError, LawFileError, RungUnavailable)
 
@@ -124,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         runtime.log_to_file(logging.ERROR, f"error: {exc}")
         return 2
     finally:
-        from .outdir import release_all
+        from beadrod.workflows.outdir import release_all
 
         release_all()  # the output folder's lock, for the next command of this process
 

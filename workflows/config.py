@@ -37,14 +37,14 @@ DEFAULTS: dict[str, Any] = {
     "rung": DEFAULT_RUNG,  # forward-model rung of every law (models.rungs.FIT_RUNGS)
     "seed": 0,
     "quiet": False,
-    # worker processes for the fits (workflows.parallel): 0 = two, or one per two usable
+    # worker processes for the fits (workflows.pipeline.parallel): 0 = two, or one per two usable
     # cores where there are more (at most 4); 1 = all in this process. The numbers do not
     # depend on it, the wall time does.
     "workers": 0,
     # 4 x 1000 draws: with 4 x 400 the rank-normalised R-hat of a well-mixed run (ESS ~1000)
     # scattered across the 1.01 gate (measured 1.005-1.014 for Hertz between seeds)
     # extensions: where a run's smallest bulk or tail ESS is below the gate's, the chains
-    # go on for as many draws again, at most this many times (inference.sample.run_nuts:
+    # go on for as many draws again, at most this many times (inference.sampling.sample.run_nuts:
     # one chain's excursion into an exponential tail, Maugis-Dugdale's E at its prior bound
     # on the hertz_dynamics world, left tail ESS 320 of the 400 the gate asks)
     "sampling": {"chains": 4, "warmup": 500, "samples": 1000, "target_accept": 0.9,

@@ -64,11 +64,11 @@ def load(paths: list[str], scene: Any | None = None) -> list[str]:
     """
     if not paths:
         return []
-    from beadrod.inference.likelihood import scene_quantities
-    from beadrod.inference.numpyro_models import BASELINE
+    from beadrod.inference.model.likelihood import scene_quantities
+    from beadrod.inference.model.numpyro_models import BASELINE
     from beadrod.models import registry
     from beadrod.models.lawfile import LawFileError, load_law_file
-    from beadrod.models.scenes import builtin_scene
+    from beadrod.models.scene import builtin_scene
 
     sq = scene_quantities(scene if scene is not None else builtin_scene("paper"))
     names = []

@@ -37,8 +37,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .config import RUNGS
-from .runtime import LOG_FILE, UserError
+from beadrod.workflows.config import RUNGS
+from beadrod.workflows.runtime import LOG_FILE, UserError
 
 __all__ = ["check_out", "release", "release_all", "remove_part_files", "manifest_entries",
            "OutputFolder", "OUTPUT_FILES", "LOCK_FILE", "MANIFEST_FILE"]

@@ -28,7 +28,7 @@ import time
 from dataclasses import dataclass
 from typing import Any, TextIO
 
-from .runtime import console_handler
+from beadrod.workflows.runtime import console_handler
 
 __all__ = ["STEP_ATTR", "Step", "begin", "done", "RunProgress", "format_seconds"]
 

@@ -2,7 +2,7 @@
 
 Float64, the host device count, the persistent XLA compilation cache, library warnings and
 the ``beadrod`` logger. ``workflows.cli`` calls these in the main process and
-``workflows.parallel`` in each worker, so that neither reaches into the other.
+``workflows.pipeline.parallel`` in each worker, so that neither reaches into the other.
 
 Nothing here imports JAX: float64 and the compilation cache are set through JAX's
 environment variables (read when JAX is first imported) and, if JAX is already imported,
@@ -92,7 +92,7 @@ def quiet_libraries() -> None:
 
     Silenced: ArviZ's refactoring banner (a FutureWarning on every import), jaxns'
     deprecation warnings, and the gate's own RuntimeWarning (the failure is already
-    logged once, with its numbers, by inference.diagnostics).
+    logged once, with its numbers, by inference.sampling.diagnostics).
     """
     warnings.filterwarnings("ignore", message=r"(?s)\s*ArviZ is undergoing",
                             category=FutureWarning)
@@ -236,6 +236,6 @@ def init_worker(n_devices: int, queue: Any) -> None:
     enable_x64()
     quiet_libraries()
     log_to_queue(queue)
-    from beadrod.inference.sample import configure
+    from beadrod.inference.sampling.sample import configure
 
     configure(n_devices)

@@ -1,0 +1,1 @@
+"""``beadrod bench``: the measured tables of speed and accuracy (docs/performance.md)."""
