@@ -248,7 +248,7 @@ def _hbm_sweeps(zeta: np.ndarray, drive: np.ndarray, down: np.ndarray, cfg: dict
 
     def one(z, e, rev):
         o = jnp.where(rev, jnp.asarray(om)[::-1], jnp.asarray(om))
-        xs, ok = harmonic_balance.sweep(oscillator.hertz(z), e, o, harmonics=h)
+        xs, ok = harmonic_balance.sweep(oscillator.hertz_oscillator(z), e, o, harmonics=h)
         amp = jnp.sqrt(xs[:, 1] ** 2 + xs[:, 2] ** 2)
         return jnp.where(rev, amp[::-1], amp), jnp.all(ok)
 
@@ -324,8 +324,8 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     truth = {
         "world": "hertz_dynamics", "seed": int(seed), "generator": "data.synth",
         "kind": "physical",
-        "model": "models.ladder.harmonic_balance.sweep of models.ladder.oscillator.hertz(zeta_p) "
-                 "(base-excited Hertz "
+        "model": "models.ladder.harmonic_balance.sweep of "
+                 "models.ladder.oscillator.hertz_oscillator(zeta_p) (base-excited Hertz "
                  "oscillator, unilateral contact, linear dashpot), stepped sweeps up and down",
         "parameters": {**cfg, "displacement_per_volt_m_V": d_per_v},
         "protocols": protocols,

@@ -27,20 +27,20 @@ from beadrod.inference.model.likelihood import (
     without_observations,
 )
 from beadrod.inference.model.numpyro_models import (
-    LAWS,
     RUNGS,
     ForwardModelUnavailable,
     MeasuredF0,
     ModelSpec,
     build_model,
     curve_draws,
+    model_names,
     paper_spec,
 )
 from beadrod.inference.sampling.diagnostics import DiagnosticsFailed, Verdict, check, loo_report
 from beadrod.inference.sampling.sample import FitResult, configure, describe, idata_coords, run_nuts
 
 __all__ = [
-    "LAWS", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",
+    "model_names", "RUNGS", "ModelSpec", "build_model", "paper_spec", "ForwardModelUnavailable",
     "MeasuredF0", "curve_draws",
     "model_inputs", "design_inputs", "simulate", "without_observations",
     "configure", "run_nuts", "FitResult", "idata_coords", "describe",

@@ -279,6 +279,7 @@ class ContactLaw:
     cost: float = 1.0
     sampler_scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     prepared: tuple[Prepared, ...] = ()
+    table: Any = None
 
     def __post_init__(self) -> None:
         names = set(self.param_names)

@@ -3,7 +3,8 @@
 Every consumer (inference, the comparison, ``beadrod laws/shift/scene``, the figures, the
 report, the tests) iterates over :func:`laws`; nothing outside a law's own module
 branches on its name. A law is a :class:`models.law.ContactLaw` defined in its module
-(``LAW``); laws a user writes in a file are added at run time by :func:`register`.
+(``LAW``) and listed once, in :data:`beadrod.models.laws.BUILTIN`; laws a user writes in a
+file are added at run time by :func:`register`.
 
 Rungs (:data:`RUNGS`, one spelling everywhere) are the levels of the accuracy ladder;
 :data:`FIT_RUNGS` are those a sampler can afford for every law that has them.
@@ -15,24 +16,13 @@ import difflib
 from collections.abc import Iterable
 
 from beadrod.models.law import ContactLaw, RungUnavailable
-from beadrod.models.laws import (
-    dmt,
-    greenwood_williamson,
-    hertz,
-    jkr,
-    maugis_dugdale,
-    powerlaw,
-    viscoelastic,
-)
+from beadrod.models.laws import BUILTIN
 from beadrod.models.rungs import DEFAULT_RUNG, FIT_RUNGS, RUNGS, check_rung
 
 __all__ = ["RUNGS", "FIT_RUNGS", "DEFAULT_RUNG", "laws", "law_names", "get_law", "register",
            "unregister", "tension_pair", "check_rung", "ContactLaw", "RungUnavailable"]
 
-_BUILTIN: tuple[ContactLaw, ...] = (hertz.LAW, powerlaw.LAW, viscoelastic.LAW,
-                                    viscoelastic.SPLIT_LAW, jkr.LAW, dmt.LAW,
-                                    greenwood_williamson.LAW, maugis_dugdale.LAW)
-_LAWS: dict[str, ContactLaw] = {law.name: law for law in _BUILTIN}
+_LAWS: dict[str, ContactLaw] = {law.name: law for law in BUILTIN}
 
 
 def laws() -> tuple[ContactLaw, ...]:
@@ -80,6 +70,6 @@ def register(law: ContactLaw, *, replace: bool = False) -> ContactLaw:
 
 def unregister(name: str) -> None:
     """Remove a law added by :func:`register` (built-in laws stay)."""
-    if any(b.name == name for b in _BUILTIN):
+    if any(b.name == name for b in BUILTIN):
         raise ValueError(f"'{name}' is a built-in law")
     _LAWS.pop(name, None)

@@ -7,20 +7,20 @@ import pytest
 
 from beadrod.models.ladder import harmonic_balance
 from beadrod.models.ladder.backbone import backbone_shift
-from beadrod.models.ladder.oscillator import PowerLaw, hertz
+from beadrod.models.ladder.oscillator import PowerLaw, hertz_oscillator
 
 
 def test_hbm_backbone_converges_to_energy_integral_backbone():
     # conservative Hertz oscillator, amplitudes with and without contact loss
     xs = jnp.array([0.3, 0.8, 1.2])
     exact = np.asarray(backbone_shift(xs))
-    f = jax.jit(jax.vmap(lambda x: harmonic_balance.backbone_shift(hertz(), x, harmonics=7, n_time=256)))
+    f = jax.jit(jax.vmap(lambda x: harmonic_balance.backbone_shift(hertz_oscillator(), x, harmonics=7, n_time=256)))
     h7 = np.asarray(f(xs))
     np.testing.assert_allclose(h7[:2], exact[:2], rtol=1e-6)
     # contact loss: the force has a kink, the harmonic series converges algebraically
     assert h7[2] == pytest.approx(exact[2], rel=2e-3)
     # one harmonic alone is a visibly worse approximation (the mean shift matters)
-    h1 = float(harmonic_balance.backbone_shift(hertz(), 0.3, harmonics=1))
+    h1 = float(harmonic_balance.backbone_shift(hertz_oscillator(), 0.3, harmonics=1))
     assert abs(h1 - exact[0]) > 20 * abs(h7[0] - exact[0])
 
 
@@ -34,7 +34,7 @@ def test_linear_limit_peak_matches_closed_form():
 
 
 def test_frf_hysteresis_folds_and_peak():
-    law = hertz(0.01)
+    law = hertz_oscillator(0.01)
     r = harmonic_balance.frf(law, 0.015, 0.85, 1.1, harmonics=3, n_steps=200)
     assert bool(r.complete)
     om, amp = np.asarray(r.omega)[np.asarray(r.valid)], np.asarray(r.amplitude)[np.asarray(r.valid)]

@@ -1,8 +1,10 @@
 """Outside a law's own module no code branches on a law's name: the registry is the list.
 
-The source check walks inference/, data/ and workflows/ with ast and fails on any string
-literal equal to a registered law's name, except the entries of :data:`ALLOWED`, each
-with its reason (an entry must still occur, so the list can only shrink). The other tests
+The source check walks models/ (outside models/laws/, the laws' own home), inference/,
+data/ and workflows/ with ast and fails on any string literal equal to a registered law's
+name, except the entries of :data:`ALLOWED`, each with its reason (an entry must still
+occur, so the list can only shrink). Outside models/laws/ no module of models/ imports a
+law's module either: the registry serves the laws (models.laws.BUILTIN is their one list). The other tests
 register laws under new names and check that the places which used to list names (the
 tension, the job order, ``beadrod scene``, the figures) serve them from their attributes.
 """
@@ -30,8 +32,6 @@ ALLOWED: dict[tuple[str, str], str] = {
         "ModelSpec(eta_mode='split') kept as a compatibility spelling of the split law",
     ("inference.model.numpyro_models", "viscoelastic_split"):
         "the same compatibility mapping, in the other direction",
-    ("workflows.commands.shift", "viscoelastic"):
-        "the former law name 'viscoelastic_paper_eq25', kept as a spelling of a law and rung",
     ("workflows.bench.inference", "hertz"):
         "the benchmark's reference law (ESS/s of the others is quoted against it)",
     ("workflows.bench.device", "hertz"):
@@ -44,16 +44,82 @@ ALLOWED: dict[tuple[str, str], str] = {
 }
 
 
+def _sources(root: Path):
+    """(module, path) of every module of the four packages, models/laws/ left out."""
+    for pkg in ("models", "inference", "data", "workflows"):
+        for path in sorted((root / pkg).rglob("*.py")):
+            rel = path.relative_to(root)
+            if rel.parts[:2] == ("models", "laws"):
+                continue
+            yield ".".join(rel.with_suffix("").parts), path
+
+
 def _literals(names: set[str], root: Path = ROOT) -> set[tuple[str, str]]:
     """(module, literal) of every string literal in ``names`` under root's packages."""
     hits = set()
-    for pkg in ("inference", "data", "workflows"):
-        for path in sorted((root / pkg).rglob("*.py")):
-            module = ".".join(path.relative_to(root).with_suffix("").parts)
-            for node in ast.walk(ast.parse(path.read_text(), str(path))):
-                if isinstance(node, ast.Constant) and node.value in names:
-                    hits.add((module, node.value))
+    for module, path in _sources(root):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Constant) and node.value in names:
+                hits.add((module, node.value))
     return hits
+
+
+def _law_modules(root: Path = ROOT) -> set[str]:
+    """Dotted names of the laws' modules: every module of a law's folder, and each module
+    of models/laws/ that defines LAW."""
+    laws = root / "models" / "laws"
+    out = set()
+    for path in laws.rglob("*.py"):
+        rel = path.relative_to(root).with_suffix("").parts
+        dotted = ".".join(rel[:-1] if rel[-1] == "__init__" else rel)
+        in_folder = len(rel) > 4 or (len(rel) == 4 and rel[-1] != "__init__")
+        defines_law = any(isinstance(n, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == "LAW" for t in n.targets)
+            for n in ast.parse(path.read_text()).body)
+        if in_folder or defines_law or (len(rel) == 4 and rel[-1] == "__init__"):
+            out.add(dotted)
+    return out
+
+
+def _law_imports(root: Path = ROOT) -> set[tuple[str, str]]:
+    """(module of models/ outside models/laws/, law module it imports)."""
+    law_modules = _law_modules(root)
+    hits = set()
+    for module, path in _sources(root):
+        if not module.startswith("models."):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                base = node.module.removeprefix("beadrod.")
+                targets = {base} | {f"{base}.{a.name}" for a in node.names}
+            elif isinstance(node, ast.Import):
+                targets = {a.name.removeprefix("beadrod.") for a in node.names}
+            else:
+                continue
+            hits |= {(module, t) for t in targets & law_modules}
+    return hits
+
+
+def test_no_module_of_models_outside_the_laws_imports_a_law():
+    hits = sorted(_law_imports())
+    assert not hits, (f"modules of models/ importing a law's module: {hits}; take the law "
+                      "from models.registry (or the law object) instead")
+
+
+def test_the_import_check_sees_a_law_import(tmp_path):
+    (tmp_path / "models" / "laws" / "jkr").mkdir(parents=True)
+    (tmp_path / "models" / "laws" / "jkr" / "__init__.py").write_text("LAW = 1\n")
+    (tmp_path / "models" / "laws" / "jkr" / "table.py").write_text("X = 1\n")
+    (tmp_path / "models" / "laws" / "hertz.py").write_text("LAW = 1\n")
+    (tmp_path / "models" / "laws" / "adhesion_map.py").write_text("X = 1\n")
+    (tmp_path / "models" / "scene").mkdir()
+    (tmp_path / "models" / "scene" / "plan.py").write_text(
+        "from beadrod.models.laws import adhesion_map, hertz\n"
+        "from beadrod.models.laws.jkr.table import X\n")
+    for pkg in ("inference", "data", "workflows"):
+        (tmp_path / pkg).mkdir()
+    assert _law_imports(tmp_path) == {("models.scene.plan", "models.laws.hertz"),
+                                      ("models.scene.plan", "models.laws.jkr.table")}
 
 
 def test_no_law_name_is_spelled_outside_the_laws_modules():
@@ -68,7 +134,8 @@ def test_no_law_name_is_spelled_outside_the_laws_modules():
 
 def test_the_source_check_sees_a_literal(tmp_path):
     # the walker itself: a module spelling a law's name is caught, other strings are not
-    (tmp_path / "workflows").mkdir()
+    for pkg in ("models", "inference", "data", "workflows"):
+        (tmp_path / pkg).mkdir()
     (tmp_path / "workflows" / "bad.py").write_text(
         'LAW = "jkr"\nif x == "dmt":\n    y = "jkr adhesion"\n')
     assert _literals({"jkr", "dmt", "hertz"}, tmp_path) == {("workflows.bad", "jkr"),

@@ -10,21 +10,21 @@ from beadrod.models.tables import shape_build, shape_read
 
 X = np.array([0.05, 0.4, 0.85, 1.1, 1.6, 2.0])
 # the second shape coordinate, where a table has one (Maugis-Dugdale's lam, inside its range)
-T = {name: 1.0 for name, tab in shape_build.TABLES.items() if tab.q_range is not None}
+T = {name: 1.0 for name, tab in shape_build.tabulated().items() if tab.q_range is not None}
 
 
 def _fast(name, x, s):
     return np.asarray(shape_read.backbone_fast(name, x, s, T.get(name)))
 
 
-@pytest.mark.parametrize("name", sorted(shape_build.TABLES))
+@pytest.mark.parametrize("name", sorted(shape_build.tabulated()))
 def test_stored_ranges_are_the_builders(name):
-    tab = shape_build.TABLES[name]
+    tab = shape_build.tabulated()[name]
     assert shape_read.shape_range(name) == (tab.p_lo, tab.p_hi)
     assert float(shape_read.load_table(name)["x_max"]) == shape_read.X_MAX
 
 
-@pytest.mark.parametrize("name", sorted(shape_build.TABLES))
+@pytest.mark.parametrize("name", sorted(shape_build.tabulated()))
 def test_values_are_held_beyond_the_ranges(name):
     p_lo, p_hi = shape_read.shape_range(name)
     for p_end, p_out in ((p_lo, p_lo - 2.0), (p_hi, p_hi + 3.0)):
@@ -37,7 +37,7 @@ def test_values_are_held_beyond_the_ranges(name):
 
 
 
-@pytest.mark.parametrize("name", sorted(shape_build.TABLES))
+@pytest.mark.parametrize("name", sorted(shape_build.tabulated()))
 def test_the_domain_ends_at_both_ends_of_the_shape_range(name):
     """Held values are not the law's at either end: past p_hi the tables stand 2e-4 to
     3.2e-4 from Hertz's backbone (module doc), ten times their stated errors."""
@@ -51,7 +51,7 @@ def test_a_second_shape_coordinate_is_refused_outside_its_range_not_held():
     """Maugis-Dugdale's lam: the table has no limit to hold beyond [0.1, 100], so its
     domain (in_table) excludes those points; inside, lam changes the shape."""
     for name in T:
-        q_lo, q_hi = shape_build.TABLES[name].q_range
+        q_lo, q_hi = shape_build.tabulated()[name].q_range
         s = 3.0
         ok = [bool(shape_read.in_table(name, 0.5, s, np.exp(q)))
               for q in (q_lo - 0.1, q_lo + 1e-9, q_hi - 1e-9, q_hi + 0.1)]

@@ -115,7 +115,7 @@ def test_contact_loss_onset_is_the_limit_of_the_orbits_either_side():
     closed-form onset as D0' grows (sigma/delta0 -> 0)."""
     spec = shape_build.spec("greenwood_williamson")
     xc, sc = spec.kink(np.log(np.array([4.19, 4.85, 4801.1, 5560.0])))
-    ref = shape_build.TABLES["greenwood_williamson"].reference_kw
+    ref = shape_build.tabulated()["greenwood_williamson"].reference_kw
     gw_law = registry.get_law("greenwood_williamson")
     for i, s in enumerate((4.19, 4.85, 4801.1, 5560.0)):
         kw = ref(s)
@@ -233,7 +233,7 @@ def test_tables_are_finite_with_finite_gradients_over_the_prior_region():
 
             g = jax.grad(total, argnums=(0, 1))(jnp.array([0.0, 0.5, 1.0, 1.9, 2.5]), v)
             assert all(np.all(np.isfinite(np.asarray(a))) for a in g), (name, v)
-    assert set(shape_build.TABLES) == {"jkr", "dmt", "greenwood_williamson", "maugis_dugdale"}
+    assert set(shape_build.tabulated()) == {"jkr", "dmt", "greenwood_williamson", "maugis_dugdale"}
 
 
 def test_tables_tend_to_the_hertz_table_as_adhesion_vanishes():

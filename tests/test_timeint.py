@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 
 from beadrod.models.ladder import harmonic_balance, time_integration
-from beadrod.models.ladder.oscillator import hertz
+from beadrod.models.ladder.oscillator import hertz_oscillator
 
 
 def test_low_drive_q_and_resonance_amplitude():
     # linear limit: -3 dB Q = 1/(2 zeta) (to O(zeta^2)); peak |q1| = E/(2 zeta sqrt(1-zeta^2))
     zeta, e = 0.025, 1e-5
     om = np.linspace(0.92, 1.08, 65)
-    s = jax.jit(lambda: time_integration.swept_sine(hertz(zeta), e, om, settle_periods=60,
+    s = jax.jit(lambda: time_integration.swept_sine(hertz_oscillator(zeta), e, om, settle_periods=60,
                                            measure_periods=2, steps_per_period=32))()
     assert time_integration.q_factor_3db(s.omega, s.amplitude) == pytest.approx(1 / (2 * zeta), rel=1e-2)
     _, x = time_integration.resonance(s.omega, s.amplitude)
@@ -23,7 +23,7 @@ def test_low_drive_q_and_resonance_amplitude():
 
 
 def test_rk4_sweep_matches_scipy_through_contact_loss():
-    law, e = hertz(0.025), 0.06
+    law, e = hertz_oscillator(0.025), 0.06
     om = np.array([0.93, 0.925, 0.92])
     # same lock-in samples in both (the transient after 10 periods is not periodic)
     kw = dict(settle_periods=10, measure_periods=2, state0=(0.8, 0.0))
@@ -53,7 +53,7 @@ def _compare(law, e, om, settle, harmonics=5):
 def test_hbm_matches_time_integration_full_frc(e, tol):
     # three drive levels with Q = 20: linear-ish, softened, contact loss with hysteresis
     om = np.linspace(0.85, 1.1, 26)
-    worst, peak = _compare(hertz(0.025), e, om, settle=40)
+    worst, peak = _compare(hertz_oscillator(0.025), e, om, settle=40)
     assert worst < tol
     if e == 0.08:
         assert peak > 1.0
@@ -63,5 +63,5 @@ def test_hbm_matches_time_integration_full_frc(e, tol):
 @pytest.mark.parametrize("e", [0.002, 0.006, 0.012])
 def test_hbm_matches_time_integration_q50_fine(e):
     om = np.linspace(0.9, 1.05, 121)
-    worst, _ = _compare(hertz(0.01), e, om, settle=150, harmonics=7)
+    worst, _ = _compare(hertz_oscillator(0.01), e, om, settle=150, harmonics=7)
     assert worst < 2e-3

@@ -102,7 +102,7 @@ from beadrod.models.law import RungUnavailable, sampler_site
 from beadrod.models.laws import hertz
 from beadrod.models.registry import FIT_RUNGS, get_law, law_names
 
-__all__ = ["LAWS", "RUNGS", "BASELINE", "ModelSpec", "ForwardModelUnavailable",
+__all__ = ["RUNGS", "BASELINE", "ModelSpec", "ForwardModelUnavailable",
            "build_model", "paper_spec", "model_names", "MeasuredF0", "log_overlap",
            "curve_draws", "law_of", "SweepCurve", "StepFold", "step_fold"]
 
@@ -114,24 +114,6 @@ RUNGS = FIT_RUNGS
 def model_names() -> tuple[str, ...]:
     """Every model the comparison can fit: the registered laws, then the baseline."""
     return (*law_names(), BASELINE)
-
-
-class _Names(tuple):
-    # LAWS stays importable as a tuple but follows the registry (laws added at run time)
-    def __iter__(self):
-        return iter(model_names())
-
-    def __contains__(self, item):
-        return item in model_names()
-
-    def __len__(self):
-        return len(model_names())
-
-    def __repr__(self):
-        return repr(model_names())
-
-
-LAWS = _Names()
 
 
 class ForwardModelUnavailable(RungUnavailable):

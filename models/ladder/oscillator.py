@@ -47,7 +47,7 @@ __all__ = [
     "PowerLaw",
     "Viscoelastic",
     "CustomLaw",
-    "hertz",
+    "hertz_oscillator",
     "rhs",
     "drive_level",
     "frequency_ratio",
@@ -106,7 +106,7 @@ class PowerLaw(ContactLaw):
         return True
 
 
-def hertz(zeta: ArrayLike = 0.0) -> PowerLaw:
+def hertz_oscillator(zeta: ArrayLike = 0.0) -> PowerLaw:
     """Hertz contact, n = 3/2."""
     return PowerLaw(n=1.5, zeta=zeta)
 

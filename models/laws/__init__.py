@@ -5,3 +5,19 @@ lists them in the order every table shows them, and :mod:`beadrod.models.registr
 them (with the laws users load from files). This folder is the only place in
 ``beadrod.models`` that names a law.
 """
+
+from beadrod.models.laws import (
+    dmt,
+    greenwood_williamson,
+    hertz,
+    jkr,
+    maugis_dugdale,
+    powerlaw,
+    viscoelastic,
+)
+
+__all__ = ["BUILTIN"]
+
+BUILTIN = (hertz.LAW, powerlaw.LAW, viscoelastic.LAW, viscoelastic.SPLIT_LAW, jkr.LAW, dmt.LAW,
+           greenwood_williamson.LAW, maugis_dugdale.LAW)
+"""The built-in laws, in the order every table and figure shows them."""

@@ -32,7 +32,7 @@ from typing import Literal
 import jax.numpy as jnp
 from jax.typing import ArrayLike
 
-__all__ = [
+__all__ = ["adhesive_alternatives",
     "Z0_DEFAULT",
     "muller_parameter",
     "tabor_parameter",
@@ -104,6 +104,19 @@ def adhesion_regime(
         reason = (f"adhesion is {ratio:.3g} of the load (>= {HERTZ_RATIO}) and Muller mu = "
                   f"{mu:.3g} is between {DMT_MU} and {JKR_MU}: transition, Maugis-Dugdale")
     return {"law": law, "reason": reason, "mu": mu, "ratio": ratio}
+
+
+def adhesive_alternatives(regime: dict) -> tuple[str, ...]:
+    """The adhesive contacts whose difference from Hertz bounds leaving adhesion out of a
+    scene in ``regime`` (:func:`adhesion_regime`): the selected one; for Maugis-Dugdale
+    both ends of its range, JKR and DMT (Johnson & Greenwood 1997); for Hertz the end the
+    Muller parameter is nearer (JKR for mu >= 1, else DMT)."""
+    law = regime["law"]
+    if law == "Hertz":
+        return ("JKR" if regime["mu"] >= 1.0 else "DMT",)
+    if law == "Maugis-Dugdale":
+        return ("JKR", "DMT")
+    return (law,)
 
 
 def plastic_limit_force(

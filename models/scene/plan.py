@@ -40,7 +40,13 @@ import numpy as np
 
 from beadrod.models.ladder.backbone import lindstedt_shift
 from beadrod.models.ladder.first_order import first_order_hertz
-from beadrod.models.laws import adhesion_map, dmt, hertz, jkr, viscoelastic
+from beadrod.models.laws import adhesion_map
+from beadrod.models.laws.scene_contacts import (
+    HERTZIAN,
+    scene_contact,
+    viscous_damping_constant,
+    viscous_linear_q,
+)
 from beadrod.models.rungs import LADDER
 from beadrod.models.scene import Scene
 from beadrod.models.scene.plan_records import Effect, Plan, shift_estimate
@@ -58,23 +64,17 @@ _N_FFT = 1024
 
 # --- the contact law and its linear numbers ---------------------------------------------
 
-def _law_functions(law: str):
-    """Static overlap, stiffness and force of the law; Maugis-Dugdale uses JKR (bracketed
-    by DMT in the adhesion effect: the plan has no Maugis-Dugdale force of its own)."""
-    if law == "Hertz":
-        return hertz, {}
-    return (dmt if law == "DMT" else jkr), {"gamma": None}
-
-
 def _linear(scene: Scene, law: str) -> dict:
-    mod, extra = _law_functions(law)
-    kw = {"e_star": scene.e_star, "radius": scene.radius}
-    if extra:
-        kw["gamma"] = scene.surface_energy
-    d0 = float(mod.static_overlap(scene.load, **kw))
-    k0 = float(mod.linear_stiffness(scene.load, **kw))
+    """Static overlap, stiffness, f0 and force of the contact the adhesion map calls ``law``
+    (Maugis-Dugdale's from JKR, bracketed by DMT in the adhesion effect: the plan has no
+    Maugis-Dugdale force of its own; laws.scene_contacts)."""
+    contact = scene_contact(law)
+    kw = contact.keywords(e_star=scene.e_star, radius=scene.radius,
+                          surface_energy=scene.surface_energy)
+    d0 = float(contact.static_overlap(scene.load, **kw))
+    k0 = float(contact.linear_stiffness(scene.load, **kw))
     return {"delta0": d0, "k0": k0, "f0": math.sqrt(k0 / scene.mass) / (2 * math.pi),
-            "force": lambda d: np.asarray(mod.force(jnp.asarray(d), **kw))}
+            "force": lambda d: np.asarray(contact.force(jnp.asarray(d), **kw))}
 
 
 def _softer(scene: Scene):
@@ -83,10 +83,11 @@ def _softer(scene: Scene):
 
 
 def _shift_at_equal_amplitude(law: str, scene: Scene, xh: np.ndarray, d0_hertz: float):
-    kw = {"load": scene.load, "e_star": scene.e_star, "radius": scene.radius,
-          "gamma": scene.surface_energy, "reference_overlap": d0_hertz}
-    mod = dmt if law == "DMT" else jkr
-    return np.asarray(mod.shift_first_order(jnp.asarray(xh), **kw))
+    contact = scene_contact(law)
+    kw = {"load": scene.load, "reference_overlap": d0_hertz,
+          **contact.keywords(e_star=scene.e_star, radius=scene.radius,
+                             surface_energy=scene.surface_energy)}
+    return np.asarray(contact.shift_first_order(jnp.asarray(xh), **kw))
 
 
 def _effect_adhesion(scene: Scene, regime: dict, d0_hertz: float, f0_hertz: float,
@@ -105,12 +106,7 @@ def _effect_adhesion(scene: Scene, regime: dict, d0_hertz: float, f0_hertz: floa
     and the larger difference is used. The f0 change (~ Fc/F0 order) is in ``details``.
     """
     law = regime["law"]
-    if law == "Hertz":
-        alternatives = ["JKR" if regime["mu"] >= 1.0 else "DMT"]
-    elif law == "Maugis-Dugdale":
-        alternatives = ["JKR", "DMT"]
-    else:
-        alternatives = [law]
+    alternatives = list(adhesion_map.adhesive_alternatives(regime))
     xh_max = amp_max / d0_hertz
     xh = np.linspace(0.0, xh_max, 9)[1:]
     s_h = np.asarray(first_order_hertz(jnp.asarray(xh)))
@@ -119,7 +115,7 @@ def _effect_adhesion(scene: Scene, regime: dict, d0_hertz: float, f0_hertz: floa
         s_a = _shift_at_equal_amplitude(alt, scene, xh, d0_hertz)
         diffs[alt] = float(np.max(np.abs(s_a - s_h)))
     bound = 2.0 * max(diffs.values())
-    included = law != "Hertz"
+    included = scene_contact(law).adhesive
     f0_change = lin["f0"] / f0_hertz - 1.0
     return Effect(
         "adhesion", included, "adhesion/load (2 pi gamma R / F0)", regime["ratio"],
@@ -320,9 +316,9 @@ def _losses(scene: Scene, omega0: float) -> tuple[float, float]:
     if not scene.viscosity:
         return math.inf, (scene.quality_factor if scene.quality_factor is not None
                           else math.inf)
-    a_damp = float(viscoelastic.damping_constant(eta1=scene.viscosity, young=soft.young,
-                                                 poisson=soft.poisson))
-    q_visc = float(viscoelastic.linear_q(damping_constant=a_damp, omega0=omega0))
+    a_damp = float(viscous_damping_constant(eta1=scene.viscosity, young=soft.young,
+                                            poisson=soft.poisson))
+    q_visc = float(viscous_linear_q(damping_constant=a_damp, omega0=omega0))
     return q_visc, scene.quality_factor if scene.quality_factor is not None else math.inf
 
 
@@ -340,8 +336,8 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
     regime = adhesion_map.adhesion_regime(scene.load, gamma=scene.surface_energy,
                                       radius=scene.radius, e_star=scene.e_star)
     law = regime["law"]
-    lin_h = _linear(scene, "Hertz")
-    lin = lin_h if law == "Hertz" else _linear(scene, law)
+    lin_h = _linear(scene, HERTZIAN.label)
+    lin = _linear(scene, law) if scene_contact(law).adhesive else lin_h
     q_visc, q_meas = _losses(scene, 2 * math.pi * lin["f0"])
     q = min(q_visc, q_meas)          # most damping: the largest pull of the peak
     q_amp = scene.quality_factor if scene.quality_factor is not None else q_visc
@@ -387,9 +383,10 @@ def _plan(scene: Scene, amplitude_max: float | None, tol: float) -> Plan:
     effects.append(_effect_viscous(q, q_visc, tol, pull))
     effects.append(_effect_jumps(q_j, s_c / d_j))  # least damping: the likeliest jumps
     sep = 0.0
-    if law == "JKR":
-        sep = float(jkr.minimum_overlap(e_star=scene.e_star, radius=scene.radius,
-                                        gamma=scene.surface_energy)) / lin["delta0"]
+    let_go = scene_contact(law).minimum_overlap
+    if let_go is not None:
+        sep = float(let_go(e_star=scene.e_star, radius=scene.radius,
+                           gamma=scene.surface_energy)) / lin["delta0"]
     effects.append(_effect_contact_loss(lin, scene.load, x_c, sep))
     effects.append(_effect_plasticity(scene, lin, amp_max))
     e_harm, h = _effect_harmonics(lin, x_c, tol)

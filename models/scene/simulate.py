@@ -68,6 +68,7 @@ import numpy as np
 from beadrod.models.ladder.harmonic_balance import default_time_samples
 from beadrod.models.ladder.time_integration import resonance
 from beadrod.models.laws import adhesion_map
+from beadrod.models.laws.scene_contacts import HERTZIAN, scene_contact
 from beadrod.models.scene import Scene
 from beadrod.models.scene.peak import min_overlap, peaks_along
 from beadrod.models.scene.plan import EFFECT_NAMES, Plan, plan_scene
@@ -345,15 +346,16 @@ def _build(scene, plan, include, exclude, harmonics, rod_q, ti_modes, steps, set
             built.discard(dep)
             notes.append(f"{dep} needs the rod: not built")
 
-    law_sim = plan.contact_law if "adhesion" in built else "Hertz"
-    if law_sim == "Hertz" and "adhesion" in built:
+    law_sim = plan.contact_law if "adhesion" in built else HERTZIAN.label
+    if not scene_contact(law_sim).adhesive and "adhesion" in built:
         # the map picked Hertz; adding adhesion means the law the plan checked against
         law_sim = plan.effect("adhesion").details["alternatives"][0]
-    if law_sim == "Maugis-Dugdale":
-        law_sim = "JKR"
-        notes.append("Maugis-Dugdale selected by the adhesion map: simulated with the plan's "
-                     "bracket law JKR (no Maugis-Dugdale force implemented); the plan's "
+    stand_in = scene_contact(law_sim).simulated_as
+    if stand_in is not None:
+        notes.append(f"{law_sim} selected by the adhesion map: simulated with the plan's "
+                     f"bracket law {stand_in} (no {law_sim} force implemented); the plan's "
                      "adhesion bound brackets it by DMT")
+        law_sim = stand_in
     d0, k0 = linear_contact(scene, law_sim)
     omega0 = math.sqrt(k0 / scene.mass)
     s = k0 * d0 / scene.load

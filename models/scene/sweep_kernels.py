@@ -7,6 +7,7 @@ in models/scene/simulate.py; the resonance peak at a given amplitude is in model
 
 from __future__ import annotations
 
+import functools
 import math
 from functools import partial
 
@@ -18,7 +19,7 @@ from jax.typing import ArrayLike
 
 from beadrod.models.ladder.harmonic_balance import newton
 from beadrod.models.ladder.oscillator import ContactLaw, CustomLaw
-from beadrod.models.laws import dmt, hertz, jkr, viscoelastic
+from beadrod.models.laws.scene_contacts import scene_contact, viscous_damping_constant
 from beadrod.models.safe_math import safe_pow
 from beadrod.models.scene import Scene, rod
 from beadrod.models.scene.plan import Plan
@@ -36,14 +37,14 @@ def _hertz_g(y: jnp.ndarray, yd: jnp.ndarray, p: dict) -> jnp.ndarray:
     return jnp.where(y > 0, jnp.maximum(total, 0.0), 0.0)
 
 
-def _jkr_g(y: jnp.ndarray, yd: jnp.ndarray, p: dict) -> jnp.ndarray:
-    el = jkr.force(p["d0"] * y, e_star=p["es"], radius=p["r"], gamma=p["gamma"]) / p["f0"]
-    return el + jnp.where(y > 0, 2.0 * p["zl"] * p["s"] * yd, 0.0)
+@functools.cache
+def _adhesive_g(force):
+    # one function per contact's force, so that jit caches survive across simulators
+    def g(y: jnp.ndarray, yd: jnp.ndarray, p: dict) -> jnp.ndarray:
+        el = force(p["d0"] * y, e_star=p["es"], radius=p["r"], gamma=p["gamma"]) / p["f0"]
+        return el + jnp.where(y > 0, 2.0 * p["zl"] * p["s"] * yd, 0.0)
 
-
-def _dmt_g(y: jnp.ndarray, yd: jnp.ndarray, p: dict) -> jnp.ndarray:
-    el = dmt.force(p["d0"] * y, e_star=p["es"], radius=p["r"], gamma=p["gamma"]) / p["f0"]
-    return el + jnp.where(y > 0, 2.0 * p["zl"] * p["s"] * yd, 0.0)
+    return g
 
 
 class Dyn(eqx.Module):
@@ -87,13 +88,13 @@ def rod_modes(f_rod: float, n: int, *, dispersion_scene: Scene | None = None,
 
 
 def linear_contact(scene: Scene, law: str) -> tuple[float, float]:
-    """Static overlap delta0 [m] and linear stiffness K0 [N/m] of ``law`` under the load."""
-    mod = hertz if law == "Hertz" else (dmt if law == "DMT" else jkr)
-    kw = {"e_star": scene.e_star, "radius": scene.radius}
-    if law != "Hertz":
-        kw["gamma"] = scene.surface_energy
-    return float(mod.static_overlap(scene.load, **kw)), float(mod.linear_stiffness(scene.load,
-                                                                                   **kw))
+    """Static overlap delta0 [m] and linear stiffness K0 [N/m] of the contact the adhesion
+    map calls ``law`` (laws.scene_contacts) under the load."""
+    contact = scene_contact(law)
+    kw = contact.keywords(e_star=scene.e_star, radius=scene.radius,
+                          surface_energy=scene.surface_energy)
+    return (float(contact.static_overlap(scene.load, **kw)),
+            float(contact.linear_stiffness(scene.load, **kw)))
 
 
 def build_dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: float,
@@ -105,8 +106,8 @@ def build_dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: 
     soft = min((scene.bead_material, scene.rod_material), key=lambda mt: mt.young)
     if "viscous_losses" in built:
         if scene.viscosity:
-            aw = float(viscoelastic.damping_constant(eta1=scene.viscosity, young=soft.young,
-                                                     poisson=soft.poisson)) * omega0
+            aw = float(viscous_damping_constant(eta1=scene.viscosity, young=soft.young,
+                                                poisson=soft.poisson)) * omega0
         elif math.isfinite(q_meas):
             aw = 1.0 / q_meas
             notes.append(f"no viscosity given: Kuwabara-Kono losses with A omega0 = 1/Q = {aw:.3g}")
@@ -119,13 +120,13 @@ def build_dynamics(scene: Scene, plan: Plan, built: set[str], law_sim: str, d0: 
     if aw == 0.0 and zl == 0.0:
         raise ValueError(f"scene '{scene.name}': no losses (give viscosity_Pa_s or "
                          "quality_factor): a forced response needs a finite Q")
-    if law_sim == "Hertz":
+    if not scene_contact(law_sim).adhesive:
         contact = CustomLaw(_hertz_g, {"aw": jnp.asarray(aw), "zl": jnp.asarray(zl)}, 1.5)
     else:
         p = {"d0": jnp.asarray(d0), "es": jnp.asarray(scene.e_star),
              "r": jnp.asarray(scene.radius), "gamma": jnp.asarray(scene.surface_energy),
              "f0": jnp.asarray(scene.load), "s": jnp.asarray(s), "zl": jnp.asarray(zl)}
-        contact = CustomLaw(_jkr_g if law_sim == "JKR" else _dmt_g, p, s, zeta=0.5 * aw)
+        contact = CustomLaw(_adhesive_g(scene_contact(law_sim).force), p, s, zeta=0.5 * aw)
 
     if "rod" in built:
         measured = scene.rod_first_resonance is not None

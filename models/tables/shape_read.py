@@ -6,7 +6,7 @@ The evaluation half of :mod:`models.tables.shape_build`: the laws' backbone rung
 forces (it imports the laws), so the dependency runs one way, law -> this module <-
 builder. Nothing here needs a law object: each table carries its own shape range
 (``p_range``, p = ln s) and amplitude range (``x_max``), written by
-:func:`models.tables.surrogate.build` from the builder's :data:`models.tables.shape_build.TABLES`.
+:func:`models.tables.surrogate.build` from the builder's each law's ``TABLE``.
 
 Shape parameters s (what each law passes): JKR r = F0/Fc, Fc = 3 pi gamma R; DMT
 r = F0/Fc, Fc = 4 pi gamma R; Greenwood-Williamson D0' = delta0'/sigma (overlap counted
@@ -71,7 +71,7 @@ def backbone_fast(name: str, x: ArrayLike, s: ArrayLike,
     """Tabulated backbone Delta f/f0 [-] of law ``name`` at x = delta_a/delta0 (delta0 the
     law's overlap) and shape parameter s (and t, the second one, for a table that has it:
     Maugis-Dugdale's lam; s and t scalars then); x clipped to [0, X_MAX], ln s and ln t
-    to the table's ranges (values held at the ends: :data:`models.tables.shape_build.TABLES`).
+    to the table's ranges (values held at the ends: each law's ``TABLE``).
 
     ``decay``: k > 0 for a law whose backbone tends to Hertz's as s -> inf like s^-k.
     Above p_hi the table's departure from Hertz's backbone at its end then decays as

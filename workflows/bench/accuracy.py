@@ -76,9 +76,9 @@ def _frc_timing():
     import jax
 
     from beadrod.models.ladder import harmonic_balance
-    from beadrod.models.ladder.oscillator import hertz
+    from beadrod.models.ladder.oscillator import hertz_oscillator
 
-    law = hertz(0.01)
+    law = hertz_oscillator(0.01)
     out = []
     for h in (3, 7):
         f = jax.jit(lambda e, h=h: harmonic_balance.frf(law, e, 0.85, 1.1, harmonics=h,
@@ -101,9 +101,9 @@ def _ti_vs_scipy(quick):
     import jax
 
     from beadrod.models.ladder import time_integration
-    from beadrod.models.ladder.oscillator import hertz
+    from beadrod.models.ladder.oscillator import hertz_oscillator
 
-    law, e = hertz(0.025), 0.06        # Q = 20, drive with contact loss at resonance
+    law, e = hertz_oscillator(0.025), 0.06        # Q = 20, drive with contact loss at resonance
     om = np.linspace(0.88, 1.02, 8 if quick else 26)
     kw = dict(settle_periods=40, measure_periods=2)
     # the lock-in of a not-quite-settled point depends on the samples per period, so each

@@ -48,9 +48,9 @@ def _simulator_rows(batches: tuple[int, ...], n_freq: int, budget_s: float) -> l
     import jax.numpy as jnp
 
     from beadrod.models.ladder import time_integration
-    from beadrod.models.ladder.oscillator import hertz
+    from beadrod.models.ladder.oscillator import hertz_oscillator
 
-    law = hertz(0.01)  # Q = 50
+    law = hertz_oscillator(0.01)  # Q = 50
     om = jnp.linspace(0.85, 1.02, n_freq)
     f = jax.jit(jax.vmap(lambda e: time_integration.swept_sine(law, e, om, steps_per_period=128,
                                                        settle_periods=40,

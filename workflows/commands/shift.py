@@ -60,8 +60,6 @@ or whose nominal value is that scene quantity (``--eta``: each viscosity of the 
 else that scene quantity where the law takes it (models.nominal.scene_names); a law
 with none of these refuses the flag."""
 
-# the former law name of the paper's Eq. 25, kept as a spelling of (viscoelastic, paper_eq25)
-_ALIASES = {"viscoelastic_paper_eq25": ("viscoelastic", "paper_eq25")}
 
 
 def _fmt(v: float) -> str:
@@ -246,8 +244,6 @@ def _shift_table(law: str, x: list[float], *, method: str, n: float | None,
 
     scene = resolve_scene(scene_path, builtin, flag="--scene")[0]
     lawfiles.load(law_files or [], scene)
-    if law in _ALIASES:
-        law, method = _ALIASES[law]
     xs = check_x(x)
     contact = get_law(law)
     given, scene_given = given_values(contact, dict(params or {}),

@@ -77,10 +77,7 @@ def _registry_laws() -> list[Any]:
         from beadrod.models import registry
     except ImportError:
         return []
-    fn = getattr(registry, "laws", None)
-    if callable(fn):
-        return list(fn())
-    return list(getattr(registry, "LAWS", {}).values())
+    return list(registry.laws())
 
 
 def _registry_law(name: str) -> Any | None:

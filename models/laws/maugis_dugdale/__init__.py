@@ -13,6 +13,9 @@ None of these imports this module.
 
 from __future__ import annotations
 
+import jax.numpy as jnp
+import numpy as np
+
 from beadrod.models.laws.maugis_dugdale.contact import (
     LAM_STAR,
     angle_from_contact_radius,
@@ -45,6 +48,7 @@ from beadrod.models.laws.maugis_dugdale.contact import (
     transition_parameter,
     work_of_adhesion,
 )
+from beadrod.models.tables.shape_spec import ShapeTable
 
 __all__ = [
     "LAM_STAR", "work_of_adhesion", "scales", "transition_parameter", "cohesive_stress",
@@ -67,6 +71,29 @@ backbone, paper's scene, past contact loss (x = 1.5): 1.85e-4 and 1.84e-5 at r =
 1.6e-5, 7.4e-7), where k = 1 overstates it by at most 9e-7 at r = 1e4
 (tests/test_shape_tables.py)."""
 __all__ += ["HERTZ_DECAY"]
+
+
+
+def _table_kw(r, lam):
+    # units with K = 4 E*/3 = 1, R = 1, pi w R = 1 (so a_s = d_s = F_s = 1): the load is
+    # r times the pull-off force -Pbar_c(lam)
+    lam = jnp.asarray(lam, float)
+    return {"load": -jnp.asarray(r, float) * reduced_pull_off(lam), "radius": 1.0,
+            "e_star": 0.75, "gamma": 0.5 / np.pi, "lam": lam, "mass": 1.0}
+
+
+TABLE = ShapeTable(
+    _table_kw, float(np.log(0.3)), float(np.log(1000.0)),
+    held=("as for JKR, with Fc the Maugis-Dugdale pull-off force (3 pi gamma R to "
+          "4 pi gamma R); lambda outside [0.1, 100] (the prior's range) is outside the table"),
+    # the second coordinate, ln lambda: the shape moves from DMT-like to JKR-like
+    # across lambda ~ 0.3-3; its Chebyshev terms fall to ~1e-7 of S by the 16th
+    q_range=(float(np.log(0.1)), float(np.log(100.0))), m_q=20)
+"""The backbone table's specification (:mod:`beadrod.models.tables.shape_build`): two shape
+coordinates, p = ln(F0/Fc) with Fc the pull-off force, and q = ln lam in [ln 0.1, ln 100].
+Stated error as for JKR: 1e-5 in Delta f/f0 away from the contact-loss corner, 1e-4 in the
+0.01 of x past it (tests/test_shape_tables.py)."""
+__all__ += ["TABLE"]
 
 
 def _law():
@@ -129,6 +156,7 @@ def _law():
         # its sweeps' likelihood is folded instead (inference.speed.residual_fold, built in the
         # mode search)
         cost=5.0,
+        table=TABLE,
         # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
         # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2 (JKR-like),
         # so gamma's posterior follows a curved ridge over ln lam, which NUTS crosses
