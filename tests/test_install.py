@@ -95,7 +95,10 @@ def test_a_built_wheel_imports_next_to_a_users_folders(tmp_path):
             (".dist-info", ".data"))}
         z.extractall(site)
     assert tops == {"beadrod"}
-    assert (site / "beadrod" / "models" / "scenes").is_dir()
+    assert (site / "beadrod" / "models" / "scene" / "presets" / "paper.toml").is_file()
+    # every stored table travels with the package, a law folder's own ones too
+    stored = {p.relative_to(ROOT) for p in (ROOT / "models").rglob("*.npz")}
+    assert stored and all((site / "beadrod" / p).is_file() for p in stored), stored
     assert (site / "beadrod" / "data" / "paper_like" / "measurements.csv").is_file()
     deps = sysconfig.get_paths()["purelib"]
     code = f"import sys; sys.path[:0] = [{str(site)!r}, {deps!r}]; " + PROBE

@@ -117,8 +117,7 @@ import pytest
 from beadrod.inference.evidence.bridge import bridge_sampling_log_z
 from beadrod.inference.evidence.log_z import EvidenceResult
 from beadrod.inference.model.likelihood import design_inputs, simulate
-from beadrod.inference.model.numpyro_models import LAWS as INFERENCE_LAWS
-from beadrod.inference.model.numpyro_models import build_model
+from beadrod.inference.model.numpyro_models import build_model, model_names
 from beadrod.inference.sampling import diagnostics
 from beadrod.inference.sampling.sample import run_nuts
 from beadrod.models import registry
@@ -146,7 +145,7 @@ TRUTHS: dict[str, dict[str, float]] = {
 }
 # the registry's laws that the inference builds and the comparison loop fits
 LAWS = tuple(name for name in registry.law_names()
-             if name in INFERENCE_LAWS and name in MODEL_SPECS and name in TRUTHS)
+             if name in model_names() and name in MODEL_SPECS and name in TRUTHS)
 SPECS = comparison_specs(list(LAWS), DEFAULTS["rung"], "normal")
 
 DATA_SEEDS = {"hertz": 10, "powerlaw": 11, "viscoelastic": 12, "jkr": 13, "dmt": 14,
