@@ -11,6 +11,12 @@ A law is a :class:`ContactLaw` built in the law's own module (``models/laws/hert
   computed by the generic numerics of :mod:`models.ladder.generic` from the force alone;
 * its linear Q where it has a loss channel, its rungs and its reference.
 
+These come in three groups, each a small frozen dataclass: :class:`Physics` (the force,
+the fast paths, the rungs: what the law computes), :class:`SamplerHints` (how the
+inference samples and schedules it) and :class:`Presentation` (its label, reference,
+colour and description: how it is shown). A reader asks the group:
+``law.physics.force``, ``law.sampler.cost``, ``law.presentation.label``.
+
 Keyword conventions. Every function of a law receives the *resolved* keywords of
 :meth:`ContactLaw.resolve`: the scene quantities of :data:`SCENE_KEYS` (``radius`` [m],
 ``young`` [Pa], ``poisson`` [-], ``e_star`` [Pa], ``load`` [N], ``mass`` [kg],
@@ -43,8 +49,8 @@ import numpy as np
 
 from beadrod.models.rungs import LADDER
 
-__all__ = ["Prior", "Param", "Prepared", "ContactLaw", "SCENE_KEYS", "RungUnavailable",
-           "effective_modulus", "prior_median", "sampler_site"]
+__all__ = ["Prior", "Param", "Prepared", "Physics", "SamplerHints", "Presentation", "ContactLaw",
+           "SCENE_KEYS", "RungUnavailable", "effective_modulus", "prior_median", "sampler_site"]
 
 SCENE_KEYS = ("radius", "young", "poisson", "e_star", "load", "mass", "gravity",
               "roughness_rms", "surface_energy")
@@ -202,17 +208,19 @@ class Prepared:
 
 
 @dataclass(frozen=True, eq=False)
-class ContactLaw:
-    """One contact law (see the module docstring). Instances compare by identity.
+class Physics:
+    """What a law computes: its force, the fast paths that replace the generic numerics,
+    its rungs and their domains.
 
     ``force(delta, **kw)`` [N] is required. Optional fast paths, each called with the
-    resolved keywords:
+    resolved keywords (:meth:`ContactLaw.resolve`):
 
     * ``static_overlap(**kw)`` -> delta0 [m] under ``load``;
     * ``overlap_from_frequency(f0, **kw)`` -> delta0 [m] a measured f0 [Hz] implies;
-    * ``frequency_from_overlap(delta0, **kw)`` -> f0 [Hz], its inverse (:meth:`frequency_at`;
-      a law that sets ``overlap_from_frequency`` with a scatter treatment of its own
-      should set it, else the inverse is a Newton solve of ``overlap_from_frequency``);
+    * ``frequency_from_overlap(delta0, **kw)`` -> f0 [Hz], its inverse
+      (:meth:`ContactLaw.frequency_at`; a law that sets ``overlap_from_frequency`` with a
+      scatter treatment of its own should set it, else the inverse is a Newton solve of
+      ``overlap_from_frequency``);
     * ``shifts``: rung name -> ``fn(x, **kw)`` with ``delta0`` [m] and ``omega0``
       [rad/s] among the keywords (per sweep);
     * ``linear_q(**kw)`` (with ``omega0``) -> Q [-], for laws with a loss channel;
@@ -225,41 +233,24 @@ class ContactLaw:
     * ``domains``: rung name -> ``fn(x, **kw)`` -> bool array, True where that rung's
       fast path is valid (a table's range). Outside it the fast path returns a held
       value, so samplers must not count it: the inference gives the point zero
-      likelihood (:meth:`in_domain`). A rung with no entry is valid everywhere.
+      likelihood (:meth:`ContactLaw.in_domain`). A rung with no entry is valid everywhere.
 
     ``rungs``: the rungs the law computes (those of :data:`models.rungs.FIT_RUNGS` are the
     ones it can be fitted at); those without a ``shifts`` entry are served by
     :mod:`models.ladder.generic` and :mod:`models.ladder.generic_dynamics` (exact, slow).
-    ``in_default_comparison`` False keeps a law out of ``beadrod compare`` unless it is
-    asked for by name (the law says why in its ``description``).
-
-    ``sampler_scales``: parameter name -> ``s(**others)`` > 0, a function of the law's
-    parameters that have no scale of their own. The sampler then moves in p s (its
-    unconstrained coordinate: ln(p s) for a positive p) instead of p, at site
-    :func:`sampler_site` (p stays a deterministic site of that name); p's prior is
-    unchanged (a change of variables). For a posterior ridge along which the data fix p s
-    and not p, which a dense mass matrix cannot follow where s varies over the other
-    parameters' range (the law says why in its module).
 
     ``prepared``: :class:`Prepared` intermediates that several of the law's functions read
-    (Maugis-Dugdale's static state). :meth:`resolve` computes each once and adds it to the
-    keywords; the functions read it with :meth:`Prepared.value`, which recomputes it where
-    the keywords no longer hold the objects it was computed from. In a sampler's step it
-    is then computed once instead of at every place the log density reads it (and its
-    gradient taken once).
+    (Maugis-Dugdale's static state). :meth:`ContactLaw.resolve` computes each once and adds
+    it to the keywords; the functions read it with :meth:`Prepared.value`, which recomputes
+    it where the keywords no longer hold the objects it was computed from. In a sampler's
+    step it is then computed once instead of at every place the log density reads it (and
+    its gradient taken once).
 
-    ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
-    behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
-    ``tension_param`` names the loss parameter of the shared law, which the split law
-    carries as ``<tension_param>_shift`` and ``<tension_param>_q``. ``cost``: a fit's
-    relative wall time (1 = a closed-form law), used only to start the costliest fits
-    first.
+    ``table``: the specification of the law's stored backbone table
+    (:class:`models.tables.shape_spec.ShapeTable`), for a law whose exact backbone depends
+    on a shape parameter at a given load; None where the law has no such table.
     """
 
-    name: str
-    label: str
-    reference: str
-    params: tuple[Param, ...]
     force: Callable[..., Any]
     rungs: tuple[str, ...] = LADDER
     shifts: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
@@ -270,22 +261,80 @@ class ContactLaw:
     restoring_force: Callable[..., Any] | None = None
     contact_edge: Callable[..., Any] | None = None
     domains: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
-    color: str | None = None
-    source: str = "built-in"
-    description: str = ""
-    tension_role: str | None = None
-    in_default_comparison: bool = True
-    tension_param: str | None = None
-    cost: float = 1.0
-    sampler_scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     prepared: tuple[Prepared, ...] = ()
     table: Any = None
 
+
+@dataclass(frozen=True, eq=False)
+class SamplerHints:
+    """How the inference should sample and schedule a law: hints that change no value the
+    law computes.
+
+    ``scales``: parameter name -> ``s(**others)`` > 0, a function of the law's parameters
+    that have no scale of their own. The sampler then moves in p s (its unconstrained
+    coordinate: ln(p s) for a positive p) instead of p, at site :func:`sampler_site` (p
+    stays a deterministic site of that name); p's prior is unchanged (a change of
+    variables). For a posterior ridge along which the data fix p s and not p, which a dense
+    mass matrix cannot follow where s varies over the other parameters' range (the law
+    says why in its module). :class:`ContactLaw` checks that each names one of its
+    parameters.
+
+    ``cost``: a fit's relative wall time (1 = a closed-form law), used only to start the
+    costliest fits first.
+    """
+
+    scales: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+    cost: float = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Presentation:
+    """How a law is named and shown: in tables, figures, reports and ``beadrod laws``.
+
+    ``label``: its display name; ``reference``: where its physics comes from;
+    ``color``: its colour in figures (a '#rrggbb' string; None: one is assigned);
+    ``description``: one paragraph on what it is (``beadrod laws``).
+    ``in_default_comparison`` False keeps a law out of ``beadrod compare`` unless it is
+    asked for by name (the law says why in its ``description``).
+
+    ``tension_role`` ('shared' or 'split') and ``tension_param`` mark the pair of laws
+    behind the Q-versus-shift tension (:func:`models.registry.tension_pair`):
+    ``tension_param`` names the loss parameter of the shared law, which the split law
+    carries as ``<tension_param>_shift`` and ``<tension_param>_q``.
+    """
+
+    label: str
+    reference: str = ""
+    color: str | None = None
+    description: str = ""
+    in_default_comparison: bool = True
+    tension_role: str | None = None
+    tension_param: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ContactLaw:
+    """One contact law (see the module docstring). Instances compare by identity.
+
+    ``name``: its registry name (``--law``); ``params``: its :class:`Param` s;
+    ``physics``: what it computes (:class:`Physics`); ``presentation``: how it is named and
+    shown (:class:`Presentation`); ``sampler``: hints for the inference
+    (:class:`SamplerHints`); ``source``: 'built-in' or the path of the law file it came
+    from.
+    """
+
+    name: str
+    params: tuple[Param, ...]
+    physics: Physics
+    presentation: Presentation
+    sampler: SamplerHints = field(default_factory=SamplerHints)
+    source: str = "built-in"
+
     def __post_init__(self) -> None:
         names = set(self.param_names)
-        for name in self.sampler_scales:
+        for name in self.sampler.scales:
             if name not in names:
-                raise ValueError(f"law '{self.name}': sampler_scales names {name!r}, which is "
+                raise ValueError(f"law '{self.name}': sampler.scales names {name!r}, which is "
                                  f"not one of its parameters {sorted(names)}")
 
     # ------------------------------------------------------------------ parameters
@@ -295,13 +344,14 @@ class ContactLaw:
 
     @property
     def predicts_q(self) -> bool:
-        return self.linear_q is not None
+        return self.physics.linear_q is not None
 
     def too_slow_for_nuts(self, rung: str) -> bool:
         """True where a built-in law has ``rung`` only as the generic quadrature (no closed
         form or table): that quadrature at every likelihood call is too slow for NUTS. A law
         file's law is never so marked: its file asked for the rung."""
-        return rung in self.rungs and rung not in self.shifts and self.source == "built-in"
+        return (rung in self.physics.rungs and rung not in self.physics.shifts
+                and self.source == "built-in")
 
     def param(self, name: str) -> Param:
         for p in self.params:
@@ -314,12 +364,12 @@ class ContactLaw:
         """``values`` with each parameter that has a sampler scale given at its sample site
         instead (:func:`sampler_site`: the value times its scale, computed from the other
         parameters in ``values``, which must be there); other keys pass through."""
-        out = {k: v for k, v in values.items() if k not in self.sampler_scales}
+        out = {k: v for k, v in values.items() if k not in self.sampler.scales}
         others = {k: v for k, v in values.items()
-                  if k in self.param_names and k not in self.sampler_scales}
+                  if k in self.param_names and k not in self.sampler.scales}
         missing = [p for p in self.param_names
-                   if p not in self.sampler_scales and p not in values]
-        for name, scale in self.sampler_scales.items():
+                   if p not in self.sampler.scales and p not in values]
+        for name, scale in self.sampler.scales.items():
             if name not in values:
                 continue
             if missing:
@@ -332,29 +382,29 @@ class ContactLaw:
         """Keywords for the law's functions: scene quantities overlaid by ``theta``.
 
         ``e_star`` follows ``young`` and ``poisson`` unless it is a law parameter; the
-        law's ``prepared`` intermediates are added (:class:`Prepared`).
+        law's ``physics.prepared`` intermediates are added (:class:`Prepared`).
         """
         kw = {k: scene[k] for k in SCENE_KEYS if k in scene}
         kw.update(theta)
         if "e_star" not in self.param_names and "young" in kw and "poisson" in kw:
             kw["e_star"] = effective_modulus(kw["young"], kw["poisson"])
-        for item in self.prepared:
+        for item in self.physics.prepared:
             kw.update(item.entry(kw))
         return kw
 
     # --------------------------------------------------------------------- physics
     def overlap(self, **kw: Any) -> Any:
         """Static overlap delta0 [m] under ``load`` (fast path or generic root solve)."""
-        if self.static_overlap is not None:
-            return self.static_overlap(**kw)
+        if self.physics.static_overlap is not None:
+            return self.physics.static_overlap(**kw)
         from beadrod.models.ladder.generic import static_overlap
 
         return static_overlap(self, **kw)
 
     def overlap_at(self, f0: Any, **kw: Any) -> Any:
         """delta0 [m] that the measured linear resonance f0 [Hz] implies (see module doc)."""
-        if self.overlap_from_frequency is not None:
-            return self.overlap_from_frequency(f0, **kw)
+        if self.physics.overlap_from_frequency is not None:
+            return self.physics.overlap_from_frequency(f0, **kw)
         from beadrod.models.ladder.generic import overlap_from_frequency
 
         return overlap_from_frequency(self, f0, **kw)
@@ -367,15 +417,15 @@ class ContactLaw:
         """
         from beadrod.models.ladder import generic
 
-        if self.frequency_from_overlap is not None:
-            return self.frequency_from_overlap(delta0, **kw)
-        if self.overlap_from_frequency is None:
+        if self.physics.frequency_from_overlap is not None:
+            return self.physics.frequency_from_overlap(delta0, **kw)
+        if self.physics.overlap_from_frequency is None:
             return generic.stiffness_scale_frequency(self, delta0, **kw)
         return generic.frequency_from_overlap(self, delta0, **kw)
 
     def edge(self, **kw: Any) -> Any:
         """Overlap [m] at which contact is lost (0 unless the law is adhesive)."""
-        return 0.0 if self.contact_edge is None else self.contact_edge(**kw)
+        return 0.0 if self.physics.contact_edge is None else self.physics.contact_edge(**kw)
 
     def shift(self, x: Any, *, rung: str, fast: bool = True, **kw: Any) -> Any:
         """Delta f/f0 [-] at x = delta_a/delta0 on ``rung``.
@@ -389,10 +439,11 @@ class ContactLaw:
         'harmonic_balance' and 'time_integration' :mod:`models.ladder.generic_dynamics` (options
         ``q_factor``, ``harmonics``, ... there).
         """
-        if rung not in self.rungs:
+        if rung not in self.physics.rungs:
             raise RungUnavailable(
-                f"law '{self.name}' has no rung {rung!r}; its rungs are {list(self.rungs)}")
-        fn = self.shifts.get(rung) if fast else None
+                f"law '{self.name}' has no rung {rung!r}; its rungs are "
+                f"{list(self.physics.rungs)}")
+        fn = self.physics.shifts.get(rung) if fast else None
         if fn is not None:
             return fn(jnp.asarray(x, float), **kw)
         from beadrod.models.ladder import generic
@@ -431,27 +482,28 @@ class ContactLaw:
     def in_domain(self, x: Any, *, rung: str, **kw: Any) -> Any:
         """Bool array: True where ``rung``'s fast path holds at x (same keywords as
         :meth:`shift`); None where the rung has no limited domain."""
-        fn = self.domains.get(rung) if rung in self.shifts else None
+        fn = self.physics.domains.get(rung) if rung in self.physics.shifts else None
         return None if fn is None else fn(jnp.asarray(x, float), **kw)
 
     def quality_factor(self, **kw: Any) -> Any:
         """Linear Q [-] at ``omega0`` [rad/s]."""
-        if self.linear_q is None:
+        if self.physics.linear_q is None:
             raise ValueError(f"law '{self.name}' predicts no linear Q (no loss channel)")
-        return self.linear_q(**kw)
+        return self.physics.linear_q(**kw)
 
     def describe(self) -> dict[str, Any]:
         """JSON-ready description (``beadrod laws --json``)."""
         return {
-            "name": self.name, "label": self.label, "reference": self.reference,
-            "source": self.source, "rungs": list(self.rungs), "predicts_q": self.predicts_q,
-            "description": self.description,
+            "name": self.name, "label": self.presentation.label,
+            "reference": self.presentation.reference, "source": self.source,
+            "rungs": list(self.physics.rungs), "predicts_q": self.predicts_q,
+            "description": self.presentation.description,
             "params": [{"name": p.name, "unit": p.unit, "label": p.label,
                         "description": p.description, "prior": _prior_text(p),
                         "domain": None if p.domain is None else list(p.domain),
                         "domain_open_low": p.open_low, "domain_text": p.domain_text(),
                         "bounds": None if p.bounds is None else list(p.bounds_range()[:2]),
-                        "sampled_as": (sampler_site(p.name) if p.name in self.sampler_scales
+                        "sampled_as": (sampler_site(p.name) if p.name in self.sampler.scales
                                        else None)}
                        for p in self.params],
         }
@@ -459,7 +511,7 @@ class ContactLaw:
 
 def sampler_site(name: str) -> str:
     """The sample site of parameter ``name`` when its law gives it a sampler scale
-    (:attr:`ContactLaw.sampler_scales`): the value times the scale."""
+    (:attr:`SamplerHints.scales`): the value times the scale."""
     return f"{name}_scaled"
 
 

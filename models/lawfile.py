@@ -44,7 +44,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from beadrod.models import registry
-from beadrod.models.law import SCENE_KEYS, YOUNG, ContactLaw, Param, Prior, prior_median
+from beadrod.models.law import (
+    SCENE_KEYS,
+    YOUNG,
+    ContactLaw,
+    Param,
+    Physics,
+    Presentation,
+    Prior,
+    prior_median,
+)
 from beadrod.models.tables.autotable import attach_fast_backbone
 
 __all__ = ["LawFileError", "load_law_file", "NAME_MAX"]
@@ -223,8 +232,9 @@ def _law_of(path: Path, mod: Any, scene: dict[str, float],
                             "modulus, with the file's prior") if k == YOUNG.name else
         Param(k, "?", k, pr, f"law-file parameter {k}") for k, pr in priors.items())
     law = ContactLaw(
-        name=name, label=label, reference=reference, description=description,
-        params=law_params, force=user_force, source=str(path))
+        name=name, params=law_params, physics=Physics(force=user_force),
+        presentation=Presentation(label=label, reference=reference, description=description),
+        source=str(path))
     _check_force(path, law, scene, adhesive=adhesive)
     return attach_fast_backbone(law, scene)
 
@@ -235,9 +245,9 @@ def _check_force(path: Path, law: ContactLaw, scene: dict[str, float], *,
     kw = law.resolve(scene, theta)
     try:
         d0 = float(law.overlap(**kw))
-        f0, k0 = (float(v) for v in jax.jvp(lambda d: law.force(d, **kw), (jnp.asarray(d0),),
-                                            (jnp.asarray(1.0),)))
-        f_neg = float(law.force(jnp.asarray(-0.5 * d0), **kw))
+        f0, k0 = (float(v) for v in jax.jvp(lambda d: law.physics.force(d, **kw),
+                                            (jnp.asarray(d0),), (jnp.asarray(1.0),)))
+        f_neg = float(law.physics.force(jnp.asarray(-0.5 * d0), **kw))
     except KeyboardInterrupt:
         raise
     except BaseException as exc:  # noqa: BLE001  (the user's code, sys.exit too)

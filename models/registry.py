@@ -46,15 +46,16 @@ def get_law(name: str) -> ContactLaw:
 
 def tension_pair(names: Iterable[str] | None = None) -> tuple[str, str] | None:
     """(shared, split): the names of the laws behind the Q-versus-shift tension, the
-    first registered law whose ``tension_role`` is 'shared' and the first 'split' law
-    with the same ``tension_param``, both among ``names`` (default: every law); None if
-    ``names`` lack either."""
+    first registered law whose ``presentation.tension_role`` is 'shared' and the first
+    'split' law with the same ``tension_param``, both among ``names`` (default: every law);
+    None if ``names`` lack either."""
     wanted = None if names is None else set(names)
     pool = [law for law in laws() if wanted is None or law.name in wanted]
-    for shared in (law for law in pool if law.tension_role == "shared"):
-        split = next((law for law in pool if law.tension_role == "split"
-                      and law.tension_param == shared.tension_param), None)
-        if split is not None and shared.tension_param is not None:
+    for shared in (law for law in pool if law.presentation.tension_role == "shared"):
+        param = shared.presentation.tension_param
+        split = next((law for law in pool if law.presentation.tension_role == "split"
+                      and law.presentation.tension_param == param), None)
+        if split is not None and param is not None:
             return shared.name, split.name
     return None
 

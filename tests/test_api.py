@@ -89,7 +89,7 @@ def test_laws_is_the_registry():
     assert list(table["name"]) == [law.name for law in laws()]
     for law, row in zip(laws(), table.itertuples()):
         assert row.parameters == [p.name for p in law.params]
-        assert row.rungs == list(law.rungs) and row.label == law.label
+        assert row.rungs == list(law.physics.rungs) and row.label == law.presentation.label
 
 
 def test_shift_is_the_commands(capsys):

@@ -172,6 +172,7 @@ def test_orbit_at_contact_loss_onset_against_mpmath(off):
     assert float(backbone_shift(a1_r, n)) == pytest.approx(om_r - 1, abs=1e-11)
 
 
+@pytest.mark.slow  # in `-m slow`, run before an issue is resolved (keeps CI under 12 min)
 @pytest.mark.parametrize("n", [1.5, 2.5])
 def test_fine_rules_finite_and_agree_at_contact_loss_onset(n):
     # 256 nodes used to give NaN (nested nodes next to a turning point rounded onto it:

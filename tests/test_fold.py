@@ -30,7 +30,7 @@ RESIDUAL_FOLDED = ("maugis_dugdale",)
 
 
 def _backbone_laws():
-    return [n for n in law_names() if "backbone" in get_law(n).shifts
+    return [n for n in law_names() if "backbone" in get_law(n).physics.shifts
             and n not in RESIDUAL_FOLDED]
 
 

@@ -120,7 +120,7 @@ def test_every_builtin_law_lists_every_ladder_rung():
     from beadrod.models.registry import get_law, law_names
 
     for name in law_names():
-        assert set(LADDER) <= set(get_law(name).rungs), name
+        assert set(LADDER) <= set(get_law(name).physics.rungs), name
 
 
 def test_a_law_without_loss_refuses_a_useless_q():

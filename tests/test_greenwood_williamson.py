@@ -320,7 +320,7 @@ def test_in_the_default_comparison_with_finite_backbone_gradients_over_the_prior
     from beadrod.models.laws import greenwood_williamson
 
     law = greenwood_williamson.LAW
-    assert law.in_default_comparison
+    assert law.presentation.in_default_comparison
     scene = {"radius": R, "young": 200e9, "poisson": 0.27, "load": F0, "mass": 0.01613,
              "gravity": 9.81, "roughness_rms": 25e-9}
     x = jnp.array([0.0, 0.3, 0.9, 1.2, 2.5])

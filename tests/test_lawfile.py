@@ -80,4 +80,4 @@ def test_hertz_from_scratch_matches_builtin_hertz():
         for rung, tol in (("first_order", 1e-12), ("backbone", 1e-7)):
             np.testing.assert_allclose(law.shift(x, rung=rung, **kw),
                                        hertz.shift(x, rung=rung, **kh), atol=tol)
-    assert "tabulated" in law.description
+    assert "tabulated" in law.presentation.description

@@ -226,6 +226,7 @@ def test_contact_state_tends_to_jkr():
     np.testing.assert_allclose(st["c"], st["m"] * a, rtol=1e-15)
 
 
+@pytest.mark.slow  # in `-m slow`, run before an issue is resolved (keeps CI under 12 min)
 def test_first_order_shift_tends_to_jkr():
     x = jnp.array([0.2, 0.7, 1.0, 1.5])
     s_md = maugis_dugdale.shift_first_order(x, load=LOAD, lam=500.0, **KW)

@@ -96,7 +96,7 @@ def test_stored_table_is_what_the_builder_makes():
 
 
 def test_the_prepared_state_is_used_only_with_the_keywords_it_was_computed_from():
-    """ContactLaw.prepared (models.law.Prepared): resolve adds the static state once; the
+    """Physics.prepared (models.law.Prepared): resolve adds the static state once; the
     overlaps, the reference overlap and the backbone are the same with it as with keywords
     built by hand (bit for bit), and keywords whose gamma changed after resolve get the new gamma's
     values, not the held state's (a stale state would give the old ones)."""

@@ -150,8 +150,11 @@ def renamed():
     """Copies of the tension pair, of Hertz (costly) and of the power law under new names."""
     made = [dataclasses.replace(viscoelastic.LAW, name="kv_test"),
             dataclasses.replace(viscoelastic.SPLIT_LAW, name="kv_test_split"),
-            dataclasses.replace(hertz.LAW, name="hertz_costly_test", cost=10.0),
-            dataclasses.replace(powerlaw.LAW, name="exponent_test", label="exponent test")]
+            dataclasses.replace(hertz.LAW, name="hertz_costly_test",
+                                sampler=dataclasses.replace(hertz.LAW.sampler, cost=10.0)),
+            dataclasses.replace(powerlaw.LAW, name="exponent_test",
+                                presentation=dataclasses.replace(powerlaw.LAW.presentation,
+                                                                 label="exponent test"))]
     for law in made:
         register(law)
     yield {law.name: law for law in made}

@@ -172,9 +172,9 @@ def test_styles_prefer_the_registry_colour_and_label():
     from beadrod.models import registry
 
     for law in registry.laws():
-        if getattr(law, "color", None):
-            assert styles.color(law.name) == law.color, law.name
-        assert styles.label(law.name) == law.label
+        if law.presentation.color:
+            assert styles.color(law.name) == law.presentation.color, law.name
+        assert styles.label(law.name) == law.presentation.label
 
 
 def test_greek_words_become_symbols():

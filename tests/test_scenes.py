@@ -157,8 +157,11 @@ def test_scene_command_covers_every_registered_law_at_nominal_values(capsys):
     from beadrod.models.laws import hertz
     from beadrod.models.registry import law_names, register, unregister
 
-    copy = dataclasses.replace(hertz.LAW, name="hertz_copy_scene_test", label="Hertz copy",
-                               static_overlap=None, overlap_from_frequency=None)
+    copy = dataclasses.replace(
+        hertz.LAW, name="hertz_copy_scene_test",
+        presentation=dataclasses.replace(hertz.LAW.presentation, label="Hertz copy"),
+        physics=dataclasses.replace(hertz.LAW.physics, static_overlap=None,
+                                    overlap_from_frequency=None))
     register(copy)
     try:
         rc, out = _run_cli(["scene", "--json", "--param", "n=2.5"], capsys)

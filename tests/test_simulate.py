@@ -17,6 +17,7 @@ def _hertz_scene(q=50.0):
     return dataclasses.replace(s, viscosity=None, quality_factor=q, surface_energy=0.0)
 
 
+@pytest.mark.slow  # in `-m slow`, run before an issue is resolved (keeps CI under 12 min)
 def test_hertz_with_losses_reproduces_ladder_rung4():
     # no rod, Hertz, Kuwabara-Kono losses of Q = 50 (A omega0 = 1/Q): the ladder's rung-4 law
     sim = build_simulator(_hertz_scene(50.0), exclude={"rod", "adhesion"},

@@ -138,7 +138,7 @@ def test_tension_on_synthetic_paper_like_data():
 
 
 def test_analyse_tension_reads_the_laws_loss_parameter_by_name():
-    """A law whose loss parameter is not called eta (models.law.ContactLaw.tension_param):
+    """A law whose loss parameter is not called eta (models.law.Presentation.tension_param):
     the same draws under other names give the same block, keys unchanged."""
     shared, split, rng = _fits(2)
     eta_q, eta_shift = 10.0 ** rng.normal(4.8, 0.05, 800), 10.0 ** rng.normal(6.0, 0.05, 800)

@@ -77,9 +77,9 @@ def load(paths: list[str], scene: Any | None = None) -> list[str]:
         known = next((law for law in registry.laws() if law.source == src), None)
         if known is None:
             law = load_law_file(src, sq, reserved={BASELINE: "the law-free baseline"})
-            why = label_problem(law.label)
+            why = label_problem(law.presentation.label)
             if why is not None:
-                raise LawFileError(f"law file {src}: LABEL {law.label!r} {why}")
+                raise LawFileError(f"law file {src}: LABEL {law.presentation.label!r} {why}")
             known = registry.register(law)
         names.append(known.name)
     return names

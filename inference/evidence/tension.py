@@ -106,7 +106,7 @@ def analyse_tension(
     (``eta_shift`` is ignored, and may be None, on a rung where eta does not enter the
     shift); ``shared`` and ``split`` the joint fits' InferenceData (with posterior
     predictive draws); ``log_z_*`` their (log Z, error) [nats] when computed. ``param``:
-    the loss parameter's name in the shared fit (models.law.ContactLaw.tension_param);
+    the loss parameter's name in the shared fit (models.law.Presentation.tension_param);
     the split fit carries it as ``<param>_shift`` and ``<param>_q``. The keys say eta
     whatever ``param`` is called. JSON-ready.
     """

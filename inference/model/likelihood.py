@@ -194,7 +194,7 @@ def simulate(model: Any, design: dict[str, Any], truth: dict[str, Any],
 
     spec = getattr(model, "spec", None)
     if spec is not None and spec.law in law_names():
-        # a parameter sampled scaled (models.law.ContactLaw.sampler_scales) is conditioned
+        # a parameter sampled scaled (models.law.SamplerHints.scales) is conditioned
         # at its sample site
         truth = get_law(spec.law).sampler_values(truth)
     cond = handlers.condition(model, data={k: jnp.asarray(v) for k, v in truth.items()})

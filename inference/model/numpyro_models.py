@@ -158,10 +158,10 @@ class ModelSpec:
             raise ValueError(f"unknown law {self.law!r}; choose from {list(model_names())}")
         if self.rung not in RUNGS:
             raise ValueError(f"unknown rung {self.rung!r}; choose from {list(RUNGS)}")
-        if self.law != BASELINE and self.rung not in get_law(self.law).rungs:
+        if self.law != BASELINE and self.rung not in get_law(self.law).physics.rungs:
             raise ForwardModelUnavailable(
                 f"law '{self.law}' cannot be fitted at rung '{self.rung}': its rungs are "
-                f"{list(get_law(self.law).rungs)}")
+                f"{list(get_law(self.law).physics.rungs)}")
         if self.likelihood not in ("normal", "student_t"):
             raise ValueError("likelihood must be 'normal' or 'student_t'")
 
@@ -188,20 +188,20 @@ def law_of(spec: ModelSpec):
 
 def paper_spec(law: str, **kw: Any) -> ModelSpec:
     """The paper's own formulas (rung 'paper_eq25' where the law has it, else first order)."""
-    rung = "paper_eq25" if "paper_eq25" in get_law(law).rungs else "first_order"
+    rung = "paper_eq25" if "paper_eq25" in get_law(law).physics.rungs else "first_order"
     return ModelSpec(law=law, rung=rung, **kw)
 
 
 def _theta(law, spec: ModelSpec) -> dict[str, Any]:
     # the parameters without a sampler scale first: a scale is a function of them
     free = {p.name: numpyro.sample(p.name, law_prior(p, spec.overrides))
-            for p in law.params if p.name not in law.sampler_scales}
+            for p in law.params if p.name not in law.sampler.scales}
     theta = dict(free)
     for p in law.params:
-        scale = law.sampler_scales.get(p.name)
+        scale = law.sampler.scales.get(p.name)
         if scale is not None:
             # p s ~ the law's prior of p scaled by s (a change of variables: p keeps its
-            # prior); the sampler's coordinate is that of p s (models.law.ContactLaw)
+            # prior); the sampler's coordinate is that of p s (models.law.SamplerHints)
             s = scale(**free)
             base = law_prior(p, spec.overrides)
             # the transform's domain is the prior's support, so that the scaled site's
@@ -277,7 +277,7 @@ def _probe(spec: ModelSpec, data_scene: dict | None) -> None:
     goes (inside and beyond contact loss); else ForwardModelUnavailable. Only for fast
     paths: the generic quadrature is exact by construction and costly to compile."""
     law = law_of(spec)
-    if law is None or spec.rung not in law.shifts or data_scene is None:
+    if law is None or spec.rung not in law.physics.shifts or data_scene is None:
         return
     theta = {p.name: p.prior.median() if hasattr(p.prior, "median")
              else float(p.prior.icdf(0.5)) for p in law.params}

@@ -136,7 +136,7 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
     leaves = [sweeps.f0, sweeps.position, *jax.tree_util.tree_leaves(data)]
     if not law.params or not is_concrete(*leaves):
         return None
-    fits_curve = spec.rung in law.shifts
+    fits_curve = spec.rung in law.physics.shifts
     if spec.use_shift and not fits_curve:
         return None                      # the generic quadrature is not folded
     observed = (data.get("shift") is not None and data.get("direction") is not None

@@ -55,7 +55,7 @@ _FO_RULE = tanh_sinh(81, h=7.6 / 80)   # tails to 1e-16 of the ends: t^(n-1) at 
 
 def _force(law, kw):
     kw = {k: v for k, v in kw.items() if k not in ("delta0", "omega0")}
-    return lambda d: law.force(d, **kw)
+    return lambda d: law.physics.force(d, **kw)
 
 
 def stiffness(law: Any, delta: Any, **kw: Any) -> jnp.ndarray:
@@ -166,9 +166,9 @@ def first_order_shift(law: Any, x: Any, *, delta0: Any, **kw: Any) -> jnp.ndarra
 def restoring_force(law: Any, *, delta0: Any, **kw: Any):
     """(P', divided, flight acceleration) of the dimensionless oscillator (module doc); the
     law's own exact form where it gives one (:class:`models.law.ContactLaw`)."""
-    if law.restoring_force is not None:
-        return law.restoring_force(delta0=delta0, **{k: v for k, v in kw.items()
-                                                     if k != "omega0"})
+    if law.physics.restoring_force is not None:
+        return law.physics.restoring_force(delta0=delta0, **{k: v for k, v in kw.items()
+                                                             if k != "omega0"})
     f = _force(law, kw)
     d0 = jnp.asarray(delta0, float)
     f0, k0 = jax.jvp(f, (d0,), (jnp.ones_like(d0),))

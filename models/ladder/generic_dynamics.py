@@ -77,7 +77,8 @@ class ForceLaw(oscillator.ContactLaw):
     zeta: Any = 0.0
 
     def _fk(self, d):
-        return jax.jvp(lambda v: self.law.force(v, **self.params), (d,), (jnp.ones_like(d),))
+        return jax.jvp(lambda v: self.law.physics.force(v, **self.params), (d,),
+                       (jnp.ones_like(d),))
 
     def force(self, y, yd):
         y = jnp.asarray(y, float)
@@ -110,7 +111,7 @@ def oscillator_law(law: Any, *, delta0: Any, zeta: float = 0.0, **kw: Any) -> Fo
     """:class:`ForceLaw` of ``law`` at overlap delta0 [m] with damping ratio zeta [-]."""
     params = _law_kw(kw)
     d0 = jnp.asarray(delta0, float)
-    f0, k0 = jax.jvp(lambda v: law.force(v, **params), (d0,), (jnp.ones_like(d0),))
+    f0, k0 = jax.jvp(lambda v: law.physics.force(v, **params), (d0,), (jnp.ones_like(d0),))
     if not (float(f0) > 0.0 and float(k0) > 0.0):
         raise ValueError(f"law '{law.name}': F(delta0) = {float(f0):.4g} N and "
                          f"K0 = {float(k0):.4g} N/m at delta0 = {float(d0):.4g} m; the "
@@ -123,14 +124,14 @@ def quality_factor(law: Any, *, delta0: Any, q_factor: float | None = None,
                    **kw: Any) -> float:
     """Q [-]: the law's linear Q at omega0 if it has a loss channel, else ``q_factor``
     (default :data:`DEFAULT_Q`). omega0 [rad/s] defaults to (K0/m)^(1/2)."""
-    if law.linear_q is None:
+    if law.physics.linear_q is None:
         q = DEFAULT_Q if q_factor is None else float(q_factor)
     else:
         if "omega0" not in kw:
-            k0 = jax.jvp(lambda v: law.force(v, **_law_kw(kw)), (jnp.asarray(delta0, float),),
-                         (jnp.asarray(1.0),))[1]
+            k0 = jax.jvp(lambda v: law.physics.force(v, **_law_kw(kw)),
+                         (jnp.asarray(delta0, float),), (jnp.asarray(1.0),))[1]
             kw = {**kw, "omega0": jnp.sqrt(k0 / kw["mass"])}
-        q = float(law.linear_q(**kw))
+        q = float(law.physics.linear_q(**kw))
     if not (math.isfinite(q) and q > 2.0):
         raise ValueError(f"law '{law.name}': Q = {q:.4g}; the forced rungs need a finite "
                          "Q > 2 (a resonance peak to track)")
@@ -164,7 +165,7 @@ def _backbone(law: Any, x: np.ndarray, d0: float, kw: dict[str, Any],
     backbone (H = 7) of the conservative oscillator (the generic energy-integral
     quadrature is slow to compile; these are starting guesses and slopes)."""
     x = np.asarray(x, float)
-    if "backbone" in law.shifts:
+    if "backbone" in law.physics.shifts:
         return np.asarray(law.shift(x, rung="backbone", delta0=d0, **kw), float)
     guess = 1.0 + float(series_shift(law, float(np.max(x)), delta0=d0, **kw))
     return np.asarray(_hbm_backbone(cons, jnp.asarray(x), guess), float)

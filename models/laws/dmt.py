@@ -208,7 +208,7 @@ __all__ += ["TABLE"]
 
 def _law():
     from beadrod.models.ladder.first_order import first_order_hertz
-    from beadrod.models.law import GAMMA, YOUNG, ContactLaw
+    from beadrod.models.law import GAMMA, YOUNG, ContactLaw, Physics, Presentation, SamplerHints
     from beadrod.models.tables.powerlaw_backbone import X_MAX
     from beadrod.models.tables.shape_read import backbone_fast, in_table
 
@@ -216,33 +216,38 @@ def _law():
         return kw["load"] / pull_off_force(gamma=kw["gamma"], radius=kw["radius"])
 
     return ContactLaw(
-        name="dmt", label="DMT adhesion", color="#CC79A7",
-        reference="Derjaguin, Muller & Toporov 1975; Maugis 2000 Sec. 4",
-        description=("adhesive elastic sphere (small Tabor parameter): Hertz stiffness "
-                     "under the load plus the pull-off force 4 pi gamma R"),
+        name="dmt",
         params=(YOUNG, GAMMA),
-        force=lambda delta, *, e_star, radius, gamma, **_: force(
-            delta, e_star=e_star, radius=radius, gamma=gamma),
-        static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
-            load, e_star=e_star, radius=radius, gamma=gamma),
-        # the elastic scale E* R^(1/2) scatters, not the adhesion (as for JKR)
-        overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
-            overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
-        frequency_from_overlap=lambda d, *, load, mass, radius, gamma, **_:
-            frequency_from_overlap(d, load, mass, radius=radius, gamma=gamma),
-        # first order: the DMT stiffness is Hertz's, so in x = delta_a/delta0 (the DMT
-        # overlap) the average is exactly the Hertz one
-        shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
-                "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw),
+        physics=Physics(
+            force=lambda delta, *, e_star, radius, gamma, **_: force(
+                delta, e_star=e_star, radius=radius, gamma=gamma),
+            static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
+                load, e_star=e_star, radius=radius, gamma=gamma),
+            # the elastic scale E* R^(1/2) scatters, not the adhesion (as for JKR)
+            overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
+                overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
+            frequency_from_overlap=lambda d, *, load, mass, radius, gamma, **_:
+                frequency_from_overlap(d, load, mass, radius=radius, gamma=gamma),
+            # first order: the DMT stiffness is Hertz's, so in x = delta_a/delta0 (the DMT
+            # overlap) the average is exactly the Hertz one
+            shifts={"first_order": lambda x, **_: first_order_hertz(jnp.clip(x, 0.0, X_MAX)),
+                    "backbone": lambda x, **kw: backbone_fast("dmt", x, ratio(kw),
+                                                              decay=HERTZ_DECAY)},
+            # below the table's shape range, or beyond x = 2, the held value is not this
+            # law's backbone: the inference counts no point there (shape_backbone.in_table);
+            # above it the law tends to Hertz's as 1/r (HERTZ_DECAY)
+            domains={"backbone": lambda x, **kw: in_table("dmt", x, ratio(kw),
                                                           decay=HERTZ_DECAY)},
-        # below the table's shape range, or beyond x = 2, the held value is not this law's
-        # backbone: the inference counts no point there (shape_backbone.in_table); above
-        # it the law tends to Hertz's as 1/r (HERTZ_DECAY)
-        domains={"backbone": lambda x, **kw: in_table("dmt", x, ratio(kw),
-                                                      decay=HERTZ_DECAY)},
-        # relative fit time (models.law.ContactLaw.cost): two-parameter backbone table
-        cost=2.0,
-        table=TABLE,
+            table=TABLE,
+        ),
+        presentation=Presentation(
+            label="DMT adhesion", color="#CC79A7",
+            reference="Derjaguin, Muller & Toporov 1975; Maugis 2000 Sec. 4",
+            description=("adhesive elastic sphere (small Tabor parameter): Hertz stiffness "
+                         "under the load plus the pull-off force 4 pi gamma R"),
+        ),
+        # relative fit time (models.law.SamplerHints.cost): two-parameter backbone table
+        sampler=SamplerHints(cost=2.0),
     )
 
 

@@ -83,30 +83,36 @@ def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike) 
 
 def _law():
     from beadrod.models.ladder.first_order import first_order_hertz
-    from beadrod.models.law import YOUNG, ContactLaw
+    from beadrod.models.law import YOUNG, ContactLaw, Physics, Presentation
     from beadrod.models.rungs import LADDER
     from beadrod.models.tables.powerlaw_backbone import backbone_shift_clipped
     from beadrod.models.tables.surrogate import within_amplitude
 
     return ContactLaw(
-        name="hertz", label="Hertz", color="#0072B2",
-        reference="Johnson 1985 Sec. 4.2; paper Eqs. 3, 6, 23",
-        description="elastic sphere on a plane, F = (4/3) E* R^(1/2) delta^(3/2)",
+        name="hertz",
         params=(YOUNG,),
-        force=lambda delta, *, e_star, radius, **_: force(delta, e_star=e_star, radius=radius),
-        static_overlap=lambda *, load, e_star, radius, **_: static_overlap(
-            load, e_star=e_star, radius=radius),
-        overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
-            f0, load, mass),
-        frequency_from_overlap=lambda d, *, load, mass, **_: frequency_from_overlap(
-            d, load, mass),
-        # the paper analysed this law at first order: its 'paper_eq25' rung is first order
-        rungs=(*LADDER, "paper_eq25"),
-        shifts={"first_order": lambda x, **_: first_order_hertz(x),
-                "paper_eq25": lambda x, **_: first_order_hertz(x),
-                "backbone": lambda x, **_: backbone_shift_clipped(x, EXPONENT)},
-        # the table holds its x = 2 value beyond; the inference counts no point there
-        domains={"backbone": lambda x, **_: within_amplitude(x)},
+        physics=Physics(
+            force=lambda delta, *, e_star, radius, **_: force(delta, e_star=e_star,
+                                                              radius=radius),
+            static_overlap=lambda *, load, e_star, radius, **_: static_overlap(
+                load, e_star=e_star, radius=radius),
+            overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
+                f0, load, mass),
+            frequency_from_overlap=lambda d, *, load, mass, **_: frequency_from_overlap(
+                d, load, mass),
+            # the paper analysed this law at first order: its 'paper_eq25' rung is first order
+            rungs=(*LADDER, "paper_eq25"),
+            shifts={"first_order": lambda x, **_: first_order_hertz(x),
+                    "paper_eq25": lambda x, **_: first_order_hertz(x),
+                    "backbone": lambda x, **_: backbone_shift_clipped(x, EXPONENT)},
+            # the table holds its x = 2 value beyond; the inference counts no point there
+            domains={"backbone": lambda x, **_: within_amplitude(x)},
+        ),
+        presentation=Presentation(
+            label="Hertz", color="#0072B2",
+            reference="Johnson 1985 Sec. 4.2; paper Eqs. 3, 6, 23",
+            description="elastic sphere on a plane, F = (4/3) E* R^(1/2) delta^(3/2)",
+        ),
     )
 
 

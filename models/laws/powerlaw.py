@@ -88,7 +88,7 @@ def _law():
     import math
 
     from beadrod.models.ladder.first_order import first_order_powerlaw
-    from beadrod.models.law import ContactLaw, Param, Prior
+    from beadrod.models.law import ContactLaw, Param, Physics, Presentation, Prior
     from beadrod.models.rungs import LADDER
     from beadrod.models.tables.powerlaw_backbone import backbone_shift_clipped
     from beadrod.models.tables.surrogate import within_amplitude
@@ -110,22 +110,28 @@ def _law():
         return load * safe_pow(delta / jnp.exp(delta0_ref_log), n)
 
     return ContactLaw(
-        name="powerlaw", label="rough power law", color="#E69F00",
-        reference="paper Sec. 4.4, Eqs. 21, 26-27",
-        description="F = C delta^n; the exponent n carries the roughness",
-        params=(n, ref), force=_force,
-        static_overlap=lambda *, delta0_ref_log, **_: jnp.exp(delta0_ref_log),
-        overlap_from_frequency=lambda f0, *, load, mass, n, **_: overlap_from_frequency(
-            f0, load, mass, n),
-        frequency_from_overlap=lambda d, *, load, mass, n, **_: frequency_from_overlap(
-            d, load, mass, n),
-        # the paper analysed this law at first order: its 'paper_eq25' rung is first order
-        rungs=(*LADDER, "paper_eq25"),
-        shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),
-                "paper_eq25": lambda x, *, n, **_: first_order_powerlaw(x, n),
-                "backbone": lambda x, *, n, **_: backbone_shift_clipped(x, n)},
-        # the table holds its x = 2 value beyond; the inference counts no point there
-        domains={"backbone": lambda x, **_: within_amplitude(x)},
+        name="powerlaw",
+        params=(n, ref),
+        physics=Physics(
+            force=_force,
+            static_overlap=lambda *, delta0_ref_log, **_: jnp.exp(delta0_ref_log),
+            overlap_from_frequency=lambda f0, *, load, mass, n, **_: overlap_from_frequency(
+                f0, load, mass, n),
+            frequency_from_overlap=lambda d, *, load, mass, n, **_: frequency_from_overlap(
+                d, load, mass, n),
+            # the paper analysed this law at first order: its 'paper_eq25' rung is first order
+            rungs=(*LADDER, "paper_eq25"),
+            shifts={"first_order": lambda x, *, n, **_: first_order_powerlaw(x, n),
+                    "paper_eq25": lambda x, *, n, **_: first_order_powerlaw(x, n),
+                    "backbone": lambda x, *, n, **_: backbone_shift_clipped(x, n)},
+            # the table holds its x = 2 value beyond; the inference counts no point there
+            domains={"backbone": lambda x, **_: within_amplitude(x)},
+        ),
+        presentation=Presentation(
+            label="rough power law", color="#E69F00",
+            reference="paper Sec. 4.4, Eqs. 21, 26-27",
+            description="F = C delta^n; the exponent n carries the roughness",
+        ),
     )
 
 

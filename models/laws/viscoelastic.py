@@ -218,7 +218,15 @@ def shift_paper_without_first_order(
 
 
 def _law(split: bool):
-    from beadrod.models.law import YOUNG, ContactLaw, Param, Prior
+    from beadrod.models.law import (
+        YOUNG,
+        ContactLaw,
+        Param,
+        Physics,
+        Presentation,
+        Prior,
+        SamplerHints,
+    )
     from beadrod.models.rungs import LADDER
     from beadrod.models.tables.powerlaw_backbone import backbone_shift_clipped
     from beadrod.models.tables.surrogate import within_amplitude
@@ -247,33 +255,38 @@ def _law(split: bool):
 
     return ContactLaw(
         name="viscoelastic_split" if split else "viscoelastic",
-        label="viscoelastic (split η)" if split else "viscoelastic",
-        color="#009E73" if not split else "#56B4E9",
-        reference="Brilliantov et al. 1996; Kuwabara & Kono 1987; paper Eqs. 8-9, 25, 30",
-        description=("Hertz + Kuwabara-Kono damping; " + (
-            "separate viscosities for the shift (Eq. 25) and for Q: the tension test"
-            if split else "one viscosity predicts both the shift (Eq. 25) and Q")),
         params=params,
-        force=lambda delta, *, e_star, radius, **_: hertz.force(delta, e_star=e_star,
-                                                                 radius=radius),
-        static_overlap=lambda *, load, e_star, radius, **_: hertz.static_overlap(
-            load, e_star=e_star, radius=radius),
-        overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
-            f0, load, mass),
-        frequency_from_overlap=lambda d, *, load, mass, **_: hertz.frequency_from_overlap(
-            d, load, mass),
-        rungs=(*LADDER, "paper_eq25"),
-        shifts={"first_order": lambda x, **_: shift_first_order(x),
-                "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),
-                "paper_eq25": lambda x, *, omega0, **kw: shift_paper_eq25(
-                    x, damping_constant=a(kw, e_shift), omega=omega0)},
-        # the table holds its x = 2 value beyond; the inference counts no point there
-        domains={"backbone": lambda x, **_: within_amplitude(x)},
-        linear_q=lambda *, omega0, **kw: linear_q(damping_constant=a(kw, e_q), omega0=omega0),
-        tension_role="split" if split else "shared",
-        tension_param="eta",
-        # relative fit time (models.law.ContactLaw.cost): the cheapest on the embedded data
-        cost=0.8,
+        physics=Physics(
+            force=lambda delta, *, e_star, radius, **_: hertz.force(delta, e_star=e_star,
+                                                                     radius=radius),
+            static_overlap=lambda *, load, e_star, radius, **_: hertz.static_overlap(
+                load, e_star=e_star, radius=radius),
+            overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
+                f0, load, mass),
+            frequency_from_overlap=lambda d, *, load, mass, **_: hertz.frequency_from_overlap(
+                d, load, mass),
+            rungs=(*LADDER, "paper_eq25"),
+            shifts={"first_order": lambda x, **_: shift_first_order(x),
+                    "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),
+                    "paper_eq25": lambda x, *, omega0, **kw: shift_paper_eq25(
+                        x, damping_constant=a(kw, e_shift), omega=omega0)},
+            # the table holds its x = 2 value beyond; the inference counts no point there
+            domains={"backbone": lambda x, **_: within_amplitude(x)},
+            linear_q=lambda *, omega0, **kw: linear_q(damping_constant=a(kw, e_q),
+                                                      omega0=omega0),
+        ),
+        presentation=Presentation(
+            label="viscoelastic (split η)" if split else "viscoelastic",
+            color="#009E73" if not split else "#56B4E9",
+            reference="Brilliantov et al. 1996; Kuwabara & Kono 1987; paper Eqs. 8-9, 25, 30",
+            description=("Hertz + Kuwabara-Kono damping; " + (
+                "separate viscosities for the shift (Eq. 25) and for Q: the tension test"
+                if split else "one viscosity predicts both the shift (Eq. 25) and Q")),
+            tension_role="split" if split else "shared",
+            tension_param="eta",
+        ),
+        # relative fit time (models.law.SamplerHints.cost): the cheapest on the embedded data
+        sampler=SamplerHints(cost=0.8),
     )
 
 

@@ -2,7 +2,7 @@
 a quadrature per point becomes fast enough for a sampler.
 
 :mod:`.surrogate` builds a law's backbone surrogate from its table specification
-(``ContactLaw.table``); :mod:`.shape_read` reads the stored tables, :mod:`.shape_build`
+(``ContactLaw.physics.table``); :mod:`.shape_read` reads the stored tables, :mod:`.shape_build`
 builds them for every law that has a specification. Each module says what it stores and the
 error it was measured to.
 """

@@ -69,13 +69,13 @@ def shape_invariant(law: ContactLaw, scene: dict, theta: dict) -> bool:
 
 def attach_fast_backbone(law: ContactLaw, scene: dict) -> ContactLaw:
     """``law`` with a tabulated 'backbone' shift if it is shape-invariant (else as is)."""
-    if "backbone" in law.shifts:
+    if "backbone" in law.physics.shifts:
         return law
     theta = {p.name: prior_median(p.prior) for p in law.params}
     if not shape_invariant(law, scene, theta):
         note = ("no fast backbone: its dimensionless shape depends on its parameters or the "
                 "overlap, so the backbone is the generic quadrature (exact, slow for NUTS)")
-        return dataclasses.replace(law, description=f"{law.description}; {note}".strip("; "))
+        return _noted(law, note)
     kw = law.resolve(scene, theta)
     cache: dict[str, dict] = {}
 
@@ -93,10 +93,18 @@ def attach_fast_backbone(law: ContactLaw, scene: dict) -> ContactLaw:
 
     note = "backbone tabulated on first use (shape-invariant law)"
     # the table holds its x = 2 value beyond; the inference counts no point there
-    return dataclasses.replace(law, shifts={**law.shifts, "backbone": fast},
-                               domains={**law.domains, "backbone": lambda x, **_:
-                                        surrogate.within_amplitude(x, _X_MAX)},
-                               description=f"{law.description}; {note}".strip("; "))
+    physics = dataclasses.replace(
+        law.physics, shifts={**law.physics.shifts, "backbone": fast},
+        domains={**law.physics.domains,
+                 "backbone": lambda x, **_: surrogate.within_amplitude(x, _X_MAX)})
+    return _noted(dataclasses.replace(law, physics=physics), note)
+
+
+def _noted(law: ContactLaw, note: str) -> ContactLaw:
+    """``law`` with ``note`` appended to its description."""
+    text = f"{law.presentation.description}; {note}".strip("; ")
+    return dataclasses.replace(
+        law, presentation=dataclasses.replace(law.presentation, description=text))
 
 
 def _build(law: ContactLaw, kw: dict) -> dict:

@@ -1,7 +1,7 @@
 """Builds the backbone tables of every law that carries a table specification.
 
 A law whose exact backbone depends, at a given load, only on one or two shape parameters
-carries a :class:`~beadrod.models.tables.shape_spec.ShapeTable` (``ContactLaw.table``):
+carries a :class:`~beadrod.models.tables.shape_spec.ShapeTable` (``ContactLaw.physics.table``):
 in the relative coordinate q = delta/delta0 - 1 the backbone depends only on the restoring
 force P'(q) = [F(delta0 (1+q)) - F0]/(K0 delta0) and the flight acceleration F0/(K0
 delta0) (:mod:`beadrod.models.ladder.generic`), and for these laws both are functions of
@@ -47,14 +47,14 @@ _EXACT: dict[tuple[str, int], object] = {}
 
 
 def tabulated() -> dict[str, ShapeTable]:
-    """Law name -> table specification (``ContactLaw.table``) of every registered law that
+    """Law name -> table specification (``ContactLaw.physics.table``) of every registered law that
     carries one, in registry order."""
-    return {law.name: law.table for law in laws() if law.table is not None}
+    return {law.name: law.physics.table for law in laws() if law.physics.table is not None}
 
 
 def _law(name: str):
     law = get_law(name)
-    if law.table is None:
+    if law.physics.table is None:
         raise ValueError(f"law '{name}' has no table specification; tabulated laws: "
                          f"{list(tabulated())}")
     return law
@@ -68,7 +68,7 @@ def exact_backbone(name: str, x: ArrayLike, s: ArrayLike, nodes: int = 48,
 
     if (name, nodes) not in _EXACT:
         law = _law(name)
-        tab = law.table
+        tab = law.physics.table
 
         def one(xi, si, ti):
             kw = tab.kw(si, ti)
@@ -83,7 +83,7 @@ def spec(name: str) -> surrogate.BackboneSpec:
     """The surrogate specification of law ``name`` (p = ln s)."""
     from beadrod.models.ladder.generic import contact_loss_onset, lindstedt_coefficient
 
-    tab = _law(name).table
+    tab = _law(name).physics.table
 
     def ref(p, q):
         return tab.kw(jnp.exp(p), jnp.exp(q))

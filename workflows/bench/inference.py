@@ -185,7 +185,7 @@ def _bench_names(default: list[str]) -> list[str]:
     from beadrod.models.registry import laws
 
     extra = [law.name for law in laws() if law.name not in default and law.source == "built-in"
-             and "backbone" in law.rungs and not law.too_slow_for_nuts("backbone")]
+             and "backbone" in law.physics.rungs and not law.too_slow_for_nuts("backbone")]
     return [n for n in default if n != BASELINE] + extra + [n for n in default if n == BASELINE]
 
 

@@ -67,11 +67,11 @@ def _law_blocks(scene, given: dict[str, float]) -> dict:
             # the scene's own value is outside this law's domain (a surface energy of 0:
             # the adhesive laws are Hertz's there): the law is not defined here, the
             # scene is
-            out[law.name] = {"label": law.label, "params": {}, "sources": {},
+            out[law.name] = {"label": law.presentation.label, "params": {}, "sources": {},
                              "not_defined": str(exc)}
             continue
         st = linear_state(law, sc, theta)
-        block = {"label": law.label, "params": theta, "sources": sources,
+        block = {"label": law.presentation.label, "params": theta, "sources": sources,
                  "delta0_m": st["delta0_m"], "K0_N_m": st["K0_N_m"], "f0_Hz": st["f0_Hz"]}
         if st["Q"] is not None:
             block["Q"] = st["Q"]

@@ -105,9 +105,9 @@ def check_method(law: Any, method: str) -> str:
     from beadrod.models.rungs import check_rung
 
     rung = check_rung(method)
-    if rung not in law.rungs:
+    if rung not in law.physics.rungs:
         raise ValueError(f"law '{law.name}' has no {method} rung; its rungs: "
-                         f"{', '.join(law.rungs)}")
+                         f"{', '.join(law.physics.rungs)}")
     return rung
 
 

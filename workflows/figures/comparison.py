@@ -38,7 +38,7 @@ def figure_laws(names: Any = ()) -> list[Any]:
     from beadrod.models.registry import laws
 
     names = set(names)
-    return [law for law in laws() if law.in_default_comparison or law.name in names]
+    return [law for law in laws() if law.presentation.in_default_comparison or law.name in names]
 
 
 def _nominal_state(law: Any, sc: dict[str, float]) -> dict[str, Any] | None:
@@ -91,9 +91,9 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
             continue
         ys: dict[str, np.ndarray] = {}
         for rung in ("first_order", "backbone", "paper_eq25"):
-            if rung not in law.rungs:
+            if rung not in law.physics.rungs:
                 continue
-            if rung not in law.shifts:  # the generic quadrature is too slow for a figure
+            if rung not in law.physics.shifts:  # the generic quadrature is too slow for a figure
                 log.info("figures: %s has no fast path at rung %s; its nominal curve there "
                          "is left out", law.name, rung)
                 continue
@@ -108,7 +108,7 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
                     y, ys["first_order"], rtol=1e-9, atol=1e-12):
                 continue  # the paper's formula is this law's first order: drawn already
             ys[rung] = y
-            rows.append((law.label, _RUNG_WORDS[rung],
+            rows.append((law.presentation.label, _RUNG_WORDS[rung],
                          Curve(y, law.name, styles.RUNG_LINESTYLES[rung], width=1.2)))
     return _merge(rows)
 
@@ -223,7 +223,8 @@ def _theory_figures(save, runs, specs, inputs, scene) -> None:
          "max_shift_vs_n", "Delta f/f0 at delta_a = delta0 versus the power-law exponent n: "
          "the paper's first order (dashed; paper Fig. 5), which hardens for n > 2, and the "
          "exact backbone (solid), which softens for every n > 1"
-         + (f", with the {law.label} fit's n (median and 90 % interval)." if fitted else "."),
+         + (f", with the {law.presentation.label} fit's n (median and 90 % interval)."
+            if fitted else "."),
          "theory")
 
 
@@ -251,10 +252,10 @@ def f0_ranges(scene: Any, laws: Any = None) -> dict[str, tuple[float, float]]:
             continue
         for labels, other in groups:
             if np.allclose(rng, other, rtol=1e-9):
-                labels.append(law.label)
+                labels.append(law.presentation.label)
                 break
         else:
-            groups.append(([law.label], rng))
+            groups.append(([law.presentation.label], rng))
     return {"\n= ".join(labels): rng for labels, rng in groups}
 
 

@@ -147,7 +147,7 @@ def _spare_color(taken: Iterable[str]) -> str:
 
 def _registry_color(name: str) -> str | None:
     law = _registry_law(name)
-    want = getattr(law, "color", None) if law is not None else None
+    want = law.presentation.color if law is not None else None
     if isinstance(want, str) and want.startswith("#") and not _is_black(want):
         return want
     return None
@@ -217,7 +217,7 @@ def colors(names: Iterable[str]) -> list[str]:
 def label(name: str) -> str:
     """Display label of model ``name``: the registry's, else the pipeline's, else the name."""
     law = _registry_law(name)
-    text = getattr(law, "label", None) if law is not None else None
+    text = law.presentation.label if law is not None else None
     return str(text or _pipeline_labels().get(name) or name)
 
 

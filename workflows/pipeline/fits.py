@@ -59,18 +59,18 @@ def model_names() -> list[str]:
 
 def default_model_names() -> list[str]:
     """The models ``beadrod compare`` fits when no --laws are given: every registered law
-    whose ``in_default_comparison`` is set (a law says in its description why not), then
-    the baseline."""
+    whose ``presentation.in_default_comparison`` is set (a law says in its description why
+    not), then the baseline."""
     from beadrod.models.registry import get_law
 
     return [n for n in model_names()
-            if n == "baseline" or get_law(n).in_default_comparison]
+            if n == "baseline" or get_law(n).presentation.in_default_comparison]
 
 
 def model_labels() -> dict[str, str]:
     from beadrod.models.registry import laws
 
-    return {**{law.name: law.label for law in laws()}, "baseline": BASELINE_LABEL}
+    return {**{law.name: law.presentation.label for law in laws()}, "baseline": BASELINE_LABEL}
 
 
 def param_units() -> dict[str, str]:
@@ -119,9 +119,9 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ValueError(f"unknown law(s) {unknown}; choose from {known}")
-    lacking = [n for n in names if n != BASELINE and rung not in get_law(n).rungs]
+    lacking = [n for n in names if n != BASELINE and rung not in get_law(n).physics.rungs]
     if lacking:
-        have = {n: list(get_law(n).rungs) for n in lacking}
+        have = {n: list(get_law(n).physics.rungs) for n in lacking}
         raise ValueError(f"law(s) {lacking} cannot be fitted at rung '{rung}' (their rungs: "
                          f"{have}); choose another --rung or leave them out with --laws")
     return {name: ModelSpec(law=name, rung=rung, likelihood=likelihood, use_q=use_q)
@@ -426,7 +426,7 @@ def preferred_law(laws: list[dict[str, Any]]) -> tuple[str, str]:
     return best["name"], reason
 
 
-# the law-free baseline's fit time on the scale of models.law.ContactLaw.cost (measured on
+# the law-free baseline's fit time on the scale of models.law.SamplerHints.cost (measured on
 # the embedded data: below the table-driven adhesive laws, above the closed-form ones)
 BASELINE_COST = 1.5
 
@@ -443,7 +443,7 @@ def job_order(job: Any) -> tuple[float, int]:
     if law == BASELINE:
         cost = BASELINE_COST
     elif law in law_names():
-        cost = get_law(law).cost
+        cost = get_law(law).sampler.cost
     else:
         return (0.0, 2)
     return (-cost, int(not job.key.startswith("tension:")))

@@ -77,7 +77,8 @@ def nuts_eta(spec_kw, inputs, cfg, seed_offset: int, name: str | None = None):
                    num_warmup=s["warmup"], num_samples=s["samples"], num_chains=s["chains"],
                    seed=cfg["seed"] + seed_offset, target_accept=s["target_accept"],
                    predictive=False)
-    return np.asarray(fit.idata.posterior[name or get_law(spec.law).tension_param]).ravel()
+    param = name or get_law(spec.law).presentation.tension_param
+    return np.asarray(fit.idata.posterior[param]).ravel()
 
 
 def _prior_draws(param: str, n: int, seed: int) -> np.ndarray:
@@ -177,7 +178,7 @@ def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, e
     from beadrod.workflows.report.tension import tension_sentences
 
     shared, split = (runs[k] for k in pair)
-    param = get_law(pair[0]).tension_param
+    param = get_law(pair[0]).presentation.tension_param
 
     def log_z(run):
         s = run.summary

@@ -51,7 +51,7 @@ def rung_laws(rungs: list[str], laws: list[str] | None = None
     names, left = [], {}
     for n in (n for n in default_model_names() if n != "baseline"):
         law = get_law(n)
-        lacks = [r for r in rungs if r not in law.rungs]
+        lacks = [r for r in rungs if r not in law.physics.rungs]
         # a law from --law-file is fitted at every rung it has: its file asked for it
         slow = [r for r in rungs if law.too_slow_for_nuts(r)]
         why = ([f"no rung {', '.join(lacks)}"] if lacks else []) + (

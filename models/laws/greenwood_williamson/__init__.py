@@ -395,7 +395,15 @@ __all__ += ["TABLE"]
 
 
 def _law():
-    from beadrod.models.law import YOUNG, ContactLaw, Param, Prior
+    from beadrod.models.law import (
+        YOUNG,
+        ContactLaw,
+        Param,
+        Physics,
+        Presentation,
+        Prior,
+        SamplerHints,
+    )
     from beadrod.models.tables.shape_read import backbone_fast, in_table
 
     factor = Param(
@@ -439,31 +447,40 @@ def _law():
                                   mass=kw["mass"])
 
     return ContactLaw(
-        name="greenwood_williamson", label="rough sphere (Greenwood-Williamson)",
-        color="#999933",
-        reference="Greenwood & Williamson 1966; Greenwood & Tripp 1967; Johnson 1985 Sec. 13.4",
-        description=("elastic sphere on a Greenwood-Williamson summit layer (Gaussian heights "
-                     f"of rms sigma, Johnson's mu = {MU:g}); overlap counted from the "
-                     "outermost summits. Backbone rung: a table in (x, ln delta0'/sigma), "
-                     "three Chebyshev pieces, within 3e-5 in Delta f/f0 of the exact "
-                     "backbone (models.tables.shape_build; measured at most 1.1e-5). Used where "
-                     f"delta0'/sigma >= {MIN_REDUCED_OVERLAP:g} (0.07 summits expected in "
-                     "contact there, 1.5 at 4); the fits count no point below"),
-        params=(YOUNG, factor), force=_force, static_overlap=_overlap,
-        # the protocols scatter by the elastic scale E* R^(1/2) (F/F' does not depend on it)
-        overlap_from_frequency=_overlap_f0, frequency_from_overlap=_frequency,
-        in_default_comparison=True,
-        shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
-            "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)},
-        # the law holds where summits carry the load (MIN_REDUCED_OVERLAP) and the table
-        # covers the point (shape_backbone.in_table); the inference counts no point outside
-        domains={"backbone": lambda x, *, delta0, **kw: in_table(
-            "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)
-            & (reduced(delta0, kw) >= MIN_REDUCED_OVERLAP)},
-        # relative fit time (models.law.ContactLaw.cost): tabulated load-approach integral
+        name="greenwood_williamson",
+        params=(YOUNG, factor),
+        physics=Physics(
+            force=_force, static_overlap=_overlap,
+            # the protocols scatter by the elastic scale E* R^(1/2) (F/F' does not depend on
+            # it)
+            overlap_from_frequency=_overlap_f0, frequency_from_overlap=_frequency,
+            shifts={"backbone": lambda x, *, delta0, **kw: backbone_fast(
+                "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)},
+            # the law holds where summits carry the load (MIN_REDUCED_OVERLAP) and the table
+            # covers the point (shape_backbone.in_table); the inference counts no point
+            # outside
+            domains={"backbone": lambda x, *, delta0, **kw: in_table(
+                "greenwood_williamson", x, reduced(delta0, kw), decay=HERTZ_DECAY)
+                & (reduced(delta0, kw) >= MIN_REDUCED_OVERLAP)},
+            table=TABLE,
+        ),
+        presentation=Presentation(
+            label="rough sphere (Greenwood-Williamson)", color="#999933",
+            reference=("Greenwood & Williamson 1966; Greenwood & Tripp 1967; "
+                       "Johnson 1985 Sec. 13.4"),
+            description=("elastic sphere on a Greenwood-Williamson summit layer (Gaussian "
+                         f"heights of rms sigma, Johnson's mu = {MU:g}); overlap counted from "
+                         "the outermost summits. Backbone rung: a table in "
+                         "(x, ln delta0'/sigma), three Chebyshev pieces, within 3e-5 in "
+                         "Delta f/f0 of the exact backbone (models.tables.shape_build; "
+                         "measured at most 1.1e-5). Used where "
+                         f"delta0'/sigma >= {MIN_REDUCED_OVERLAP:g} (0.07 summits expected in "
+                         "contact there, 1.5 at 4); the fits count no point below"),
+            in_default_comparison=True,
+        ),
+        # relative fit time (models.law.SamplerHints.cost): tabulated load-approach integral
         # and two-parameter backbone table
-        cost=3.0,
-        table=TABLE,
+        sampler=SamplerHints(cost=3.0),
     )
 
 

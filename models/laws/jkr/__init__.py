@@ -80,7 +80,7 @@ __all__ += ["TABLE"]
 
 
 def _law():
-    from beadrod.models.law import GAMMA, YOUNG, ContactLaw
+    from beadrod.models.law import GAMMA, YOUNG, ContactLaw, Physics, Presentation, SamplerHints
     from beadrod.models.laws.jkr.table import X_MAX, load_ratio, shift_first_order_fast
     from beadrod.models.rungs import LADDER
     from beadrod.models.tables.shape_read import backbone_fast, in_table
@@ -92,35 +92,41 @@ def _law():
         return shift_first_order_fast(jnp.clip(x, 0.0, X_MAX), ratio(kw))
 
     return ContactLaw(
-        name="jkr", label="JKR adhesion", color="#D55E00",
-        reference="Johnson, Kendall & Roberts 1971; Johnson 1985 Sec. 5.5; paper Eqs. 13-19",
-        description=("adhesive elastic sphere (large Tabor parameter); contact is taken to "
-                     "part at delta = 0, where the approach branch forms it"),
+        name="jkr",
         params=(YOUNG, GAMMA),
-        force=lambda delta, *, e_star, radius, gamma, **_: force(
-            delta, e_star=e_star, radius=radius, gamma=gamma),
-        static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
-            load, e_star=e_star, radius=radius, gamma=gamma),
-        # Why not the default stiffness-scale scatter: remounting changes the elastic
-        # scale E* R^(1/2) of the contact, not the adhesion gamma R; scaling the whole JKR
-        # force would scale the adhesion with it. f0, F0, R and gamma fix the state.
-        overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
-            overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
-        # the paper analysed JKR at first order: its 'paper_eq25' rung is first order
-        rungs=(*LADDER, "paper_eq25"),
-        shifts={"first_order": first_order,
-                "paper_eq25": first_order,
-                "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw),
+        physics=Physics(
+            force=lambda delta, *, e_star, radius, gamma, **_: force(
+                delta, e_star=e_star, radius=radius, gamma=gamma),
+            static_overlap=lambda *, load, e_star, radius, gamma, **_: static_overlap(
+                load, e_star=e_star, radius=radius, gamma=gamma),
+            # Why not the default stiffness-scale scatter: remounting changes the elastic
+            # scale E* R^(1/2) of the contact, not the adhesion gamma R; scaling the whole
+            # JKR force would scale the adhesion with it. f0, F0, R and gamma fix the state.
+            overlap_from_frequency=lambda f0, *, load, mass, radius, gamma, **_:
+                overlap_from_frequency(f0, load, mass, radius=radius, gamma=gamma),
+            # the paper analysed JKR at first order: its 'paper_eq25' rung is first order
+            rungs=(*LADDER, "paper_eq25"),
+            shifts={"first_order": first_order,
+                    "paper_eq25": first_order,
+                    "backbone": lambda x, **kw: backbone_fast("jkr", x, ratio(kw),
+                                                              decay=HERTZ_DECAY)},
+            # below the table's shape range, or beyond x = 2, the held value is not this
+            # law's backbone: the inference counts no point there (shape_backbone.in_table);
+            # above it the law tends to Hertz's as 1/r (HERTZ_DECAY)
+            domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw),
                                                           decay=HERTZ_DECAY)},
-        # below the table's shape range, or beyond x = 2, the held value is not this law's
-        # backbone: the inference counts no point there (shape_backbone.in_table); above
-        # it the law tends to Hertz's as 1/r (HERTZ_DECAY)
-        domains={"backbone": lambda x, **kw: in_table("jkr", x, ratio(kw),
-                                                      decay=HERTZ_DECAY)},
-        # relative fit time (models.law.ContactLaw.cost): the implicit contact-radius
+            table=TABLE,
+        ),
+        presentation=Presentation(
+            label="JKR adhesion", color="#D55E00",
+            reference=("Johnson, Kendall & Roberts 1971; Johnson 1985 Sec. 5.5; "
+                       "paper Eqs. 13-19"),
+            description=("adhesive elastic sphere (large Tabor parameter); contact is taken "
+                         "to part at delta = 0, where the approach branch forms it"),
+        ),
+        # relative fit time (models.law.SamplerHints.cost): the implicit contact-radius
         # solve and the two-parameter backbone table make its fits among the slowest
-        cost=4.0,
-        table=TABLE,
+        sampler=SamplerHints(cost=4.0),
     )
 
 

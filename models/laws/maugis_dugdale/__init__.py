@@ -97,7 +97,17 @@ __all__ += ["TABLE"]
 
 
 def _law():
-    from beadrod.models.law import GAMMA, YOUNG, ContactLaw, Param, Prepared, Prior
+    from beadrod.models.law import (
+        GAMMA,
+        YOUNG,
+        ContactLaw,
+        Param,
+        Physics,
+        Prepared,
+        Presentation,
+        Prior,
+        SamplerHints,
+    )
     from beadrod.models.laws.maugis_dugdale import orbit, static
     from beadrod.models.tables.shape_read import backbone_fast, in_table
 
@@ -120,50 +130,59 @@ def _law():
         return held(kw)[0]
 
     return ContactLaw(
-        name="maugis_dugdale", label="Maugis-Dugdale adhesion", color="#882255",
-        reference="Maugis 1992, J. Colloid Interface Sci. 150, 243; Johnson & Greenwood 1997",
-        description=("adhesion between the JKR and DMT limits (Dugdale cohesive zone); its "
-                     "backbone is a table in (F0/Fc, lambda), its first order the generic "
-                     "quadrature (exact, slow in a sampler); contact is taken to part at "
-                     "delta = 0, as for JKR and DMT"),
+        name="maugis_dugdale",
         params=(YOUNG, GAMMA, lam),
-        force=lambda delta, *, e_star, radius, gamma, lam, **_: force(
-            delta, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
-        # the static state from tables in (F0/Fc, lam) (models.laws.maugis_dugdale.static:
-        # every load, lam on the law's domain; no root solve in a sampler's program)
-        static_overlap=lambda **kw: static.static_overlap(
-            kw["load"], e_star=kw["e_star"], radius=kw["radius"], gamma=kw["gamma"],
-            lam=kw["lam"], state=held(kw)),
-        # the elastic scale E* R^(1/2) scatters between mounts, not the adhesion (as JKR)
-        overlap_from_frequency=lambda f0, **kw: static.overlap_from_frequency(
-            f0, kw["load"], kw["mass"], radius=kw["radius"], gamma=kw["gamma"],
-            lam=kw["lam"], state=held(kw)),
-        frequency_from_overlap=lambda delta0, **kw: static.frequency_from_overlap(
-            delta0, kw["load"], kw["mass"], radius=kw["radius"], gamma=kw["gamma"],
-            lam=kw["lam"], state=held(kw)),
-        # the generic backbone averages the force over intervals: along the branch in
-        # theta the state is explicit, so no root solve per force (models.laws.maugis_dugdale.orbit)
-        restoring_force=orbit.restoring_force,
-        shifts={"backbone": lambda x, **kw: backbone_fast("maugis_dugdale", x, ratio(kw),
+        physics=Physics(
+            force=lambda delta, *, e_star, radius, gamma, lam, **_: force(
+                delta, e_star=e_star, radius=radius, gamma=gamma, lam=lam),
+            # the static state from tables in (F0/Fc, lam) (models.laws.maugis_dugdale.static:
+            # every load, lam on the law's domain; no root solve in a sampler's program)
+            static_overlap=lambda **kw: static.static_overlap(
+                kw["load"], e_star=kw["e_star"], radius=kw["radius"], gamma=kw["gamma"],
+                lam=kw["lam"], state=held(kw)),
+            # the elastic scale E* R^(1/2) scatters between mounts, not the adhesion (as JKR)
+            overlap_from_frequency=lambda f0, **kw: static.overlap_from_frequency(
+                f0, kw["load"], kw["mass"], radius=kw["radius"], gamma=kw["gamma"],
+                lam=kw["lam"], state=held(kw)),
+            frequency_from_overlap=lambda delta0, **kw: static.frequency_from_overlap(
+                delta0, kw["load"], kw["mass"], radius=kw["radius"], gamma=kw["gamma"],
+                lam=kw["lam"], state=held(kw)),
+            # the generic backbone averages the force over intervals: along the branch in
+            # theta the state is explicit, so no root solve per force
+            # (models.laws.maugis_dugdale.orbit)
+            restoring_force=orbit.restoring_force,
+            shifts={"backbone": lambda x, **kw: backbone_fast("maugis_dugdale", x, ratio(kw),
+                                                              kw["lam"], decay=HERTZ_DECAY)},
+            # below the table's load ratios, outside its lam range or beyond x = 2 the held
+            # value is not this law's backbone: the inference counts no point there; above
+            # them the law tends to Hertz's as 1/r (HERTZ_DECAY)
+            domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
                                                           kw["lam"], decay=HERTZ_DECAY)},
-        # below the table's load ratios, outside its lam range or beyond x = 2 the held
-        # value is not this law's backbone: the inference counts no point there; above
-        # them the law tends to Hertz's as 1/r (HERTZ_DECAY)
-        domains={"backbone": lambda x, **kw: in_table("maugis_dugdale", x, ratio(kw),
-                                                      kw["lam"], decay=HERTZ_DECAY)},
-        # relative fit time (models.law.ContactLaw.cost): the costliest law, started
-        # first. Its curve depends on two parameters, so inference.speed.fold does not fold it;
-        # its sweeps' likelihood is folded instead (inference.speed.residual_fold, built in the
-        # mode search)
-        cost=5.0,
-        table=TABLE,
-        # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
-        # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2 (JKR-like),
-        # so gamma's posterior follows a curved ridge over ln lam, which NUTS crosses
-        # slowly (on data simulated at lam = 1, one chain in four not at all). Sampled as
-        # gamma |Pbar_c(lam)| the ridge is straight (tests/test_recovery.py)
-        sampler_scales={"gamma": lambda *, lam, **_: -static.pull_off(lam)},
-        prepared=(state,),
+            table=TABLE,
+            prepared=(state,),
+        ),
+        presentation=Presentation(
+            label="Maugis-Dugdale adhesion", color="#882255",
+            reference=("Maugis 1992, J. Colloid Interface Sci. 150, 243; "
+                       "Johnson & Greenwood 1997"),
+            description=("adhesion between the JKR and DMT limits (Dugdale cohesive zone); "
+                         "its backbone is a table in (F0/Fc, lambda), its first order the "
+                         "generic quadrature (exact, slow in a sampler); contact is taken to "
+                         "part at delta = 0, as for JKR and DMT"),
+        ),
+        sampler=SamplerHints(
+            # the data fix the pull-off force Fc = -Pbar_c(lam) pi w R (through F0/Fc), not
+            # gamma itself: over lam's prior Pbar_c runs from -2 (DMT-like) to -3/2
+            # (JKR-like), so gamma's posterior follows a curved ridge over ln lam, which NUTS
+            # crosses slowly (on data simulated at lam = 1, one chain in four not at all).
+            # Sampled as gamma |Pbar_c(lam)| the ridge is straight (tests/test_recovery.py)
+            scales={"gamma": lambda *, lam, **_: -static.pull_off(lam)},
+            # relative fit time (models.law.SamplerHints.cost): the costliest law, started
+            # first. Its curve depends on two parameters, so inference.speed.fold does not
+            # fold it; its sweeps' likelihood is folded instead
+            # (inference.speed.residual_fold, built in the mode search)
+            cost=5.0,
+        ),
     )
 
 

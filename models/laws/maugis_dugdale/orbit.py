@@ -28,7 +28,7 @@ units (Delta = delta/d_s, Pbar = F/F_s, :func:`models.laws.maugis_dugdale.scales
 
 and the flight acceleration Pbar0/(k0 Delta0) below the contact edge q = -1 (the surfaces
 part at delta = 0, as for every law in the generic backbone). The law passes
-:func:`restoring_force` to :class:`models.law.ContactLaw` (``restoring_force``), so every
+:func:`restoring_force` to :class:`models.law.Physics` (``restoring_force``), so every
 generic rung that uses the restoring force (backbone, contact-loss onset, Lindstedt series)
 uses this form; tested against the generic quadrature of the force
 (tests/test_maugis_dugdale_orbit.py).
@@ -154,6 +154,6 @@ def reduced_oscillator(delta0_red: ArrayLike, lam: ArrayLike):
 def restoring_force(*, delta0: ArrayLike, e_star: ArrayLike, radius: ArrayLike,
                     gamma: ArrayLike, lam: ArrayLike, **_):
     """:func:`reduced_oscillator` at the physical overlap delta0 [m] (Delta0 = delta0/d_s):
-    the law's ``restoring_force`` (:class:`models.law.ContactLaw`)."""
+    the law's ``restoring_force`` (:class:`models.law.Physics`)."""
     _, d_s, _ = contact.scales(e_star=e_star, radius=radius, gamma=gamma)
     return reduced_oscillator(jnp.asarray(delta0, float) / d_s, lam)
