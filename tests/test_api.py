@@ -27,10 +27,10 @@ from beadrod.workflows.cli import main
 from beadrod.workflows.runtime import UserError
 
 ROOT = Path(__file__).resolve().parents[1]
-TINY = {"chains": 2, "warmup": 30, "samples": 30, "seed": 1, "evidence": "bridge",
+TINY = {"chains": 2, "warmup": 20, "samples": 20, "seed": 1, "evidence": "bridge",
         "extensions": 0, "workers": 1}
 # the same run as flags of `beadrod compare`
-TINY_FLAGS = ["--chains", "2", "--warmup", "30", "--samples", "30", "--seed", "1",
+TINY_FLAGS = ["--chains", "2", "--warmup", "20", "--samples", "20", "--seed", "1",
               "--evidence", "bridge", "--extensions", "0", "--workers", "1"]
 NOFIG = {"report": {"figures": False}}
 NAMES = {"load_dataset", "worlds", "laws", "fit", "compare", "shift", "simulate",

@@ -34,7 +34,16 @@ def _backbone_laws():
             and n not in RESIDUAL_FOLDED]
 
 
-@pytest.mark.parametrize("name", _backbone_laws())
+def _backbone_params():
+    # by default the first law without a table and the first with one; the rest in
+    # `-m slow` (CI time)
+    names = _backbone_laws()
+    first = {next(n for n in names if get_law(n).physics.table is None),
+             next(n for n in names if get_law(n).physics.table is not None)}
+    return [n if n in first else pytest.param(n, marks=pytest.mark.slow) for n in names]
+
+
+@pytest.mark.parametrize("name", _backbone_params())
 def test_fold_matches_the_exact_quantities(name, inputs):
     """Wherever the fold is used its values (the sweep curve, and the overlap map with its
     log-Jacobian where folded with it) are the exact ones to TOL; a law whose curve depends

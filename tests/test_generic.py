@@ -41,7 +41,7 @@ def test_first_order_hertz_and_jkr():
     np.testing.assert_allclose(generic.first_order_shift(law, X, delta0=d0, **kw),
                                first_order.first_order_hertz(X), atol=1e-10)
     law, kw, d0 = _kw("jkr", young=200e9, gamma=0.7)
-    ref = jkr.shift_first_order(X, load=kw["load"], e_star=kw["e_star"], radius=kw["radius"],
+    ref = jkr.contact.shift_first_order(X, load=kw["load"], e_star=kw["e_star"], radius=kw["radius"],
                                 gamma=0.7)
     np.testing.assert_allclose(generic.first_order_shift(law, X, delta0=d0, **kw), ref,
                                atol=1e-10)

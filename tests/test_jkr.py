@@ -48,10 +48,10 @@ def mp_state_under_load(load, es):
 def test_paper_static_state(young):
     es = estar(young)
     a_ref, d_ref, k_ref = mp_state_under_load(LOAD, es)
-    a = float(jkr.contact_radius(LOAD, e_star=es, **P))
-    d0 = float(jkr.static_overlap(LOAD, e_star=es, **P))
-    k0 = float(jkr.linear_stiffness(LOAD, e_star=es, **P))
-    f0 = float(jkr.linear_frequency(LOAD, MASS, e_star=es, **P))
+    a = float(jkr.contact.contact_radius(LOAD, e_star=es, **P))
+    d0 = float(jkr.contact.static_overlap(LOAD, e_star=es, **P))
+    k0 = float(jkr.contact.linear_stiffness(LOAD, e_star=es, **P))
+    f0 = float(jkr.contact.linear_frequency(LOAD, MASS, e_star=es, **P))
     assert a == pytest.approx(float(a_ref), rel=1e-12)
     assert d0 == pytest.approx(float(d_ref), rel=1e-11)
     assert k0 == pytest.approx(float(k_ref), rel=1e-10)
@@ -65,32 +65,32 @@ def test_paper_static_state(young):
 
 def test_paper_ranges_not_reproduced_with_e_over_two():
     """Dropping (1 - nu^2) (E* = E/2) hits the paper's delta0 range but not its f0 range."""
-    d = [float(jkr.static_overlap(LOAD, e_star=y / 2, **P)) * 1e9 for y in (190e9, 210e9)]
-    f = [float(jkr.linear_frequency(LOAD, MASS, e_star=y / 2, **P)) for y in (190e9, 210e9)]
+    d = [float(jkr.contact.static_overlap(LOAD, e_star=y / 2, **P)) * 1e9 for y in (190e9, 210e9)]
+    f = [float(jkr.contact.linear_frequency(LOAD, MASS, e_star=y / 2, **P)) for y in (190e9, 210e9)]
     assert round(d[0]) == 67 and round(d[1]) == 63
     assert f[0] < 2740 and f[1] < 2860
 
 
 def test_eq19_equals_parametric_derivative():
     es = estar(200e9)
-    ac = float(jkr.critical_radius(e_star=es, **P))
+    ac = float(jkr.contact.critical_radius(e_star=es, **P))
     a = jnp.array([0.6, 0.9, 1.0, 1.3, 2.0, 5.0, 40.0]) * ac
-    dfa = jax.jit(jax.vmap(jax.grad(lambda a: jkr.force_from_contact_radius(a, e_star=es, **P))))(a)
-    dda = jax.jit(jax.vmap(jax.grad(lambda a: jkr.overlap_from_contact_radius(a, e_star=es, **P))))(a)
-    k19 = jkr.stiffness_from_contact_radius(a, e_star=es, **P)
+    dfa = jax.jit(jax.vmap(jax.grad(lambda a: jkr.contact.force_from_contact_radius(a, e_star=es, **P))))(a)
+    dda = jax.jit(jax.vmap(jax.grad(lambda a: jkr.contact.overlap_from_contact_radius(a, e_star=es, **P))))(a)
+    k19 = jkr.contact.stiffness_from_contact_radius(a, e_star=es, **P)
     np.testing.assert_allclose(np.asarray(k19), np.asarray(dfa / dda), rtol=1e-12, atol=1e-6)
     assert float(k19[2]) == pytest.approx(0.0, abs=1e-6)  # K = 0 at ac (load-controlled pull-off)
-    assert float(jkr.force_from_contact_radius(ac, e_star=es, **P)) == pytest.approx(
+    assert float(jkr.contact.force_from_contact_radius(ac, e_star=es, **P)) == pytest.approx(
         -3 * math.pi * GAMMA * R_BEAD, rel=1e-12)
 
 
 def test_contact_radius_from_overlap_vs_findroot():
     es = estar(190e9)
-    dmin = float(jkr.minimum_overlap(e_star=es, **P))
-    amin = float(jkr.critical_radius(e_star=es, **P)) / 9 ** (1 / 3)
+    dmin = float(jkr.contact.minimum_overlap(e_star=es, **P))
+    amin = float(jkr.contact.critical_radius(e_star=es, **P)) / 9 ** (1 / 3)
     assert float(mp_delta(mp.mpf(amin), es)) == pytest.approx(dmin, rel=1e-12)
     deltas = [dmin * (1 - 1e-6), dmin * 0.5, -1e-9, 0.0, 1e-9, 60e-9, 1e-6, 1e-4]
-    got = np.asarray(jkr.contact_radius_from_overlap(jnp.array(deltas), e_star=es, **P))
+    got = np.asarray(jkr.contact.contact_radius_from_overlap(jnp.array(deltas), e_star=es, **P))
     for d, a in zip(deltas, got):
         with mp.workdps(30):
             # bracket on the monotone branch [a_min, large]
@@ -99,29 +99,29 @@ def test_contact_radius_from_overlap_vs_findroot():
         assert a == pytest.approx(float(ref), rel=1e-9)
     # round trip delta -> a -> delta over 16 decades of the scaled overlap
     wide = jnp.concatenate([dmin * jnp.array([0.999999, 0.7, 0.2]), jnp.logspace(-12, 4, 33) * 1e-8])
-    back = jkr.overlap_from_contact_radius(
-        jkr.contact_radius_from_overlap(wide, e_star=es, **P), e_star=es, **P)
+    back = jkr.contact.overlap_from_contact_radius(
+        jkr.contact.contact_radius_from_overlap(wide, e_star=es, **P), e_star=es, **P)
     np.testing.assert_allclose(np.asarray(back), np.asarray(wide), rtol=1e-12, atol=1e-22)
     # below the displacement-controlled pull-off: separated
-    assert float(jkr.contact_radius_from_overlap(2 * dmin, e_star=es, **P)) == 0.0
-    assert float(jkr.force(2 * dmin, e_star=es, **P)) == 0.0
+    assert float(jkr.contact.contact_radius_from_overlap(2 * dmin, e_star=es, **P)) == 0.0
+    assert float(jkr.contact.force(2 * dmin, e_star=es, **P)) == 0.0
     # F at delta_min is -(5/9) Fc
-    fmin = float(jkr.force(dmin * (1 - 1e-12), e_star=es, **P))
+    fmin = float(jkr.contact.force(dmin * (1 - 1e-12), e_star=es, **P))
     assert fmin == pytest.approx(-5 / 9 * 3 * math.pi * GAMMA * R_BEAD, rel=1e-5)
 
 
 def test_force_round_trip_and_root_gradient():
     es = estar(210e9)
-    d0 = jkr.static_overlap(LOAD, e_star=es, **P)
-    assert float(jkr.force(d0, e_star=es, **P)) == pytest.approx(LOAD, rel=1e-11)
+    d0 = jkr.contact.static_overlap(LOAD, e_star=es, **P)
+    assert float(jkr.contact.force(d0, e_star=es, **P)) == pytest.approx(LOAD, rel=1e-11)
     # d(delta0)/dF = 1/K0 (the closed-form static overlap differentiates consistently)
-    dd = jax.grad(lambda F: jkr.static_overlap(F, e_star=es, **P))(LOAD)
-    assert float(dd) == pytest.approx(1 / float(jkr.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
+    dd = jax.grad(lambda F: jkr.contact.static_overlap(F, e_star=es, **P))(LOAD)
+    assert float(dd) == pytest.approx(1 / float(jkr.contact.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
     # implicit gradient dF/d(delta) = K (Eq. 19) and vs. mpmath derivative of the inverse
-    k = jax.grad(lambda d: jkr.force(d, e_star=es, **P))(d0)
-    assert float(k) == pytest.approx(float(jkr.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
-    da = jax.grad(lambda d: jkr.contact_radius_from_overlap(d, e_star=es, **P))(d0)
-    a = float(jkr.contact_radius(LOAD, e_star=es, **P))
+    k = jax.grad(lambda d: jkr.contact.force(d, e_star=es, **P))(d0)
+    assert float(k) == pytest.approx(float(jkr.contact.linear_stiffness(LOAD, e_star=es, **P)), rel=1e-10)
+    da = jax.grad(lambda d: jkr.contact.contact_radius_from_overlap(d, e_star=es, **P))(d0)
+    a = float(jkr.contact.contact_radius(LOAD, e_star=es, **P))
     ref = 1 / mp.diff(lambda a: mp_delta(a, es), mp.mpf(a))
     assert float(da) == pytest.approx(float(ref), rel=1e-9)
     # gradients w.r.t. the parameters: finite differences of the solve
@@ -129,7 +129,7 @@ def test_force_round_trip_and_root_gradient():
         kw = dict(e_star=es, radius=R_BEAD, gamma=GAMMA)
 
         def fa(v, name=name, kw=kw):
-            return jkr.contact_radius_from_overlap(40e-9, **{**kw, name: v})
+            return jkr.contact.contact_radius_from_overlap(40e-9, **{**kw, name: v})
 
         g = float(jax.grad(fa)(val))
         h = val * 1e-6
@@ -141,18 +141,18 @@ def test_gradients_finite_near_smallest_stable_load():
     es = estar(200e9)
     fc = 3 * math.pi * GAMMA * R_BEAD
     loads = jnp.array([-fc * (1 - 1e-9), -fc * (1 - 1e-4), -0.5 * fc, 0.0, LOAD, 10.0])
-    for fn in (jkr.static_overlap, jkr.linear_stiffness, jkr.contact_radius):
+    for fn in (jkr.contact.static_overlap, jkr.contact.linear_stiffness, jkr.contact.contact_radius):
         g = jax.jit(jax.vmap(jax.grad(lambda F, e, gm, fn=fn: fn(F, e_star=e, radius=R_BEAD, gamma=gm),
                                       argnums=(0, 1, 2))))(loads, jnp.full(6, es), jnp.full(6, GAMMA))
         for arr in g:
             assert np.all(np.isfinite(np.asarray(arr))), fn.__name__
     # at exactly -Fc (and below) there is no divergence escaping as NaN/inf
-    g = jax.grad(lambda F: jkr.static_overlap(F, e_star=es, **P))(-fc)
+    g = jax.grad(lambda F: jkr.contact.static_overlap(F, e_star=es, **P))(-fc)
     assert np.isfinite(float(g))
     # overlap-side approach to displacement-controlled pull-off
-    dmin = float(jkr.minimum_overlap(e_star=es, **P))
+    dmin = float(jkr.contact.minimum_overlap(e_star=es, **P))
     ds = jnp.array([dmin * (1 - 1e-6), dmin * 0.9, 0.0])
-    g = jax.jit(jax.vmap(jax.grad(lambda d, e: jkr.force(d, e_star=e, **P), argnums=(0, 1)),
+    g = jax.jit(jax.vmap(jax.grad(lambda d, e: jkr.contact.force(d, e_star=e, **P), argnums=(0, 1)),
                          in_axes=(0, None)))(ds, es)
     assert all(np.all(np.isfinite(np.asarray(v))) for v in g)
 
@@ -160,11 +160,11 @@ def test_gradients_finite_near_smallest_stable_load():
 def test_inverse_from_frequency():
     for young in (190e9, 210e9):
         es = estar(young)
-        f0 = jkr.linear_frequency(LOAD, MASS, e_star=es, **P)
-        assert float(jkr.modulus_from_frequency(f0, LOAD, MASS, **P)) == pytest.approx(es, rel=1e-12)
-        d0 = float(jkr.overlap_from_frequency(f0, LOAD, MASS, **P))
-        assert d0 == pytest.approx(float(jkr.static_overlap(LOAD, e_star=es, **P)), rel=1e-12)
-    g = jax.grad(lambda f: jkr.overlap_from_frequency(f, LOAD, MASS, **P))(2750.0)
+        f0 = jkr.contact.linear_frequency(LOAD, MASS, e_star=es, **P)
+        assert float(jkr.contact.modulus_from_frequency(f0, LOAD, MASS, **P)) == pytest.approx(es, rel=1e-12)
+        d0 = float(jkr.contact.overlap_from_frequency(f0, LOAD, MASS, **P))
+        assert d0 == pytest.approx(float(jkr.contact.static_overlap(LOAD, e_star=es, **P)), rel=1e-12)
+    g = jax.grad(lambda f: jkr.contact.overlap_from_frequency(f, LOAD, MASS, **P))(2750.0)
     assert np.isfinite(float(g)) and float(g) < 0
 
 
@@ -180,10 +180,10 @@ def _jkr_k_reference(delta, es):
 
 def test_jkr_first_order_shift_vs_scipy():
     es = estar(210e9)
-    d0 = float(jkr.static_overlap(LOAD, e_star=es, **P))
+    d0 = float(jkr.contact.static_overlap(LOAD, e_star=es, **P))
     k0 = _jkr_k_reference(d0, es)
     xs = [0.2, 0.6, 1.0]
-    shift = jax.jit(lambda x, e, gm: jkr.shift_first_order(x, load=LOAD, e_star=e, radius=R_BEAD,
+    shift = jax.jit(lambda x, e, gm: jkr.contact.shift_first_order(x, load=LOAD, e_star=e, radius=R_BEAD,
                                                            gamma=gm))
     got = np.asarray(shift(jnp.array(xs), es, GAMMA))
     for x, v in zip(xs, got):
@@ -215,7 +215,7 @@ def test_dmt_basics():
     assert float(dmt.overlap_from_frequency(f0, LOAD, MASS, **P)) == pytest.approx(d0, rel=1e-12)
     assert float(dmt.force(-1e-9, e_star=es, **P)) == 0.0
     # ordering at the paper's load: Hertz < JKR < DMT overlap (DMT adds the most attraction)
-    d_jkr = float(jkr.static_overlap(LOAD, e_star=es, **P))
+    d_jkr = float(jkr.contact.static_overlap(LOAD, e_star=es, **P))
     assert 51.7e-9 < d_jkr < d0
 
 

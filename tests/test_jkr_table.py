@@ -16,7 +16,7 @@ R = 0.007938
 
 def _quadrature(x, ratio, e_star=2e11, load=0.02):
     gamma = load / (3 * np.pi * ratio * R)
-    return np.asarray(jkr.shift_first_order(jnp.asarray(x), load=load, e_star=e_star,
+    return np.asarray(jkr.contact.shift_first_order(jnp.asarray(x), load=load, e_star=e_star,
                                             radius=R, gamma=gamma))
 
 
@@ -47,7 +47,7 @@ def test_hertz_limit_against_closed_form():
 
 def test_load_ratio_matches_pull_off_force():
     gamma = 0.7
-    fc = float(jkr.pull_off_force(gamma=gamma, radius=R))
+    fc = float(jkr.contact.pull_off_force(gamma=gamma, radius=R))
     assert float(table.load_ratio(0.02, gamma=gamma, radius=R)) == pytest.approx(0.02 / fc)
 
 

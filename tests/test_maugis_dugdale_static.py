@@ -77,11 +77,11 @@ def test_law_overlap_maps_are_the_root_solves(gamma, lam):
     kw = law.resolve({"radius": R_BEAD, "young": 200e9, "poisson": NU, "load": LOAD,
                       "mass": MASS}, {"young": 200e9, "gamma": gamma, "lam": lam})
     p = dict(e_star=kw["e_star"], radius=R_BEAD, gamma=gamma, lam=lam)
-    assert float(law.overlap(**kw)) == pytest.approx(float(maugis_dugdale.static_overlap(LOAD, **p)),
+    assert float(law.overlap(**kw)) == pytest.approx(float(maugis_dugdale.contact.static_overlap(LOAD, **p)),
                                                      rel=1e-12)
     f0 = jnp.array([2400.0, 2700.0, 3100.0])
     d0 = law.overlap_at(f0, **kw)
-    np.testing.assert_allclose(d0, maugis_dugdale.overlap_from_frequency(f0, LOAD, MASS, radius=R_BEAD,
+    np.testing.assert_allclose(d0, maugis_dugdale.contact.overlap_from_frequency(f0, LOAD, MASS, radius=R_BEAD,
                                                              gamma=gamma, lam=lam), rtol=1e-12)
     np.testing.assert_allclose(law.frequency_at(d0, **kw), f0, rtol=1e-13)
 

@@ -89,8 +89,8 @@ def test_left_out_effect_within_bound_slow(name, effect, alt, amplitude):
     _check_left_out(name, effect, alt, amplitude)
 
 
-@pytest.mark.parametrize("name", ["paper", pytest.param("large_soft_bead", marks=pytest.mark.slow),
-                                  pytest.param("micro_bead", marks=pytest.mark.slow)])
+@pytest.mark.slow  # in `-m slow`, run before an issue is resolved (keeps CI under 12 min)
+@pytest.mark.parametrize("name", ["paper", "large_soft_bead", "micro_bead"])
 def test_contact_loss_left_out_is_exact_and_amplitude_is_an_upper_bound(name):
     # bound 0: at the plan's largest amplitude the simulated orbit never reaches the law's
     # separation overlap (0, or JKR's pull-off overlap < 0), so the unilateral clip (and the

@@ -58,13 +58,14 @@ HERTZIAN = SceneContact("Hertz", False, hertz.static_overlap, hertz.linear_stiff
                         hertz.force)
 """The non-adhesive contact: the reference every adhesive contact is measured against."""
 
-_JKR = SceneContact("JKR", True, jkr.static_overlap, jkr.linear_stiffness, jkr.force,
-                    jkr.shift_first_order, jkr.minimum_overlap)
+_jkr = jkr.contact
+_JKR = SceneContact("JKR", True, _jkr.static_overlap, _jkr.linear_stiffness, _jkr.force,
+                    _jkr.shift_first_order, _jkr.minimum_overlap)
 _DMT = SceneContact("DMT", True, dmt.static_overlap, dmt.linear_stiffness, dmt.force,
                     dmt.shift_first_order)
 # the plan takes Maugis-Dugdale's linear numbers from JKR and brackets it by DMT and JKR
-_MD = SceneContact("Maugis-Dugdale", True, jkr.static_overlap, jkr.linear_stiffness,
-                   jkr.force, jkr.shift_first_order, simulated_as="JKR")
+_MD = SceneContact("Maugis-Dugdale", True, _jkr.static_overlap, _jkr.linear_stiffness,
+                   _jkr.force, _jkr.shift_first_order, simulated_as="JKR")
 _CONTACTS = {c.label: c for c in (HERTZIAN, _DMT, _MD, _JKR)}
 
 

@@ -1,8 +1,8 @@
 """The JKR contact law (paper Sec. 4.3, Eqs. 16-19): :data:`LAW`, with its fast rungs.
 
 The mechanics (closed forms in the contact radius, the root solve delta -> a, the
-first-order quadrature) is :mod:`models.laws.jkr.contact`, re-exported here, so the law's
-functions are reached through this module. The law's first-order rung is the
+first-order quadrature) is :mod:`models.laws.jkr.contact` (``jkr.contact.force`` and the
+rest); this module builds the law object from it. The law's first-order rung is the
 table of :mod:`models.laws.jkr.table` (built from that quadrature), its backbone rung the
 table of :mod:`models.tables.shape_read`; neither table module imports this one.
 """
@@ -13,43 +13,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from beadrod.models.laws.jkr.contact import (
-    contact_radius,
-    contact_radius_from_overlap,
-    critical_radius,
     force,
-    force_from_contact_radius,
-    linear_frequency,
-    linear_stiffness,
-    minimum_overlap,
-    modulus_from_frequency,
-    overlap_from_contact_radius,
     overlap_from_frequency,
-    pull_off_force,
-    shift_first_order,
     static_overlap,
-    stiffness,
-    stiffness_from_contact_radius,
 )
 from beadrod.models.tables.shape_spec import ShapeTable, adhesive_reference_kw
 
-__all__ = [
-    "pull_off_force",
-    "critical_radius",
-    "minimum_overlap",
-    "contact_radius",
-    "overlap_from_contact_radius",
-    "force_from_contact_radius",
-    "stiffness_from_contact_radius",
-    "contact_radius_from_overlap",
-    "static_overlap",
-    "linear_stiffness",
-    "linear_frequency",
-    "stiffness",
-    "force",
-    "shift_first_order",
-    "modulus_from_frequency",
-    "overlap_from_frequency",
-]
+__all__: list[str] = []
 
 
 HERTZ_DECAY = 1.0

@@ -2,8 +2,8 @@
 
 The closed forms, the root solve and the first-order quadrature, with no contact-law
 object: :mod:`models.laws.jkr.table` tabulates :func:`shift_first_order` from here, and
-:mod:`models.laws.jkr` (the law, which uses that table) re-exports every name, so both depend
-on this module and not on each other.
+:mod:`models.laws.jkr` (the law, which uses that table) builds the law object from it, so
+both depend on this module and not on each other.
 
 With surface energy gamma [J/m^2] of each (identical) surface, the work of adhesion is
 w = 2 gamma, and in terms of the contact radius a [m]::

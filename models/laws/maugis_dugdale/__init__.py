@@ -1,8 +1,9 @@
 """The Maugis-Dugdale contact law (JKR-DMT transition): :data:`LAW`, with its fast rungs.
 
 The mechanics (Maugis' parametric solution in the angle theta, the root solves, the
-first-order quadrature) is :mod:`models.laws.maugis_dugdale.contact`, re-exported here, so
-``models.laws.maugis_dugdale.force`` and the rest keep their names. At a given load the shape
+first-order quadrature) is :mod:`models.laws.maugis_dugdale.contact`
+(``maugis_dugdale.contact.force`` and the rest); this module builds the law object from it.
+At a given load the shape
 of F(delta)/F0 against delta/delta0 depends on two numbers only, the load ratio F0/Fc
 (equivalently Pbar0 = F0/(pi w R)) and lam: the static state is tabulated in them
 (:mod:`models.laws.maugis_dugdale.static`), the backbone too (a table of
@@ -17,49 +18,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from beadrod.models.laws.maugis_dugdale.contact import (
-    LAM_STAR,
-    angle_from_contact_radius,
-    angle_from_load,
-    angle_from_overlap,
-    angle_state,
-    cohesive_stress,
-    contact_radius,
-    contact_radius_from_overlap,
-    contact_state,
-    end_angle,
     force,
-    lennard_jones_parameter,
-    linear_frequency,
-    linear_stiffness,
-    minimum_overlap,
-    modulus_from_frequency,
-    overlap_from_frequency,
-    pull_off_angle,
-    pull_off_force,
-    reduced_end_overlap,
-    reduced_force,
     reduced_pull_off,
-    reduced_slope,
-    reduced_stiffness,
-    scales,
-    shift_first_order,
-    static_overlap,
-    stiffness,
-    transition_parameter,
-    work_of_adhesion,
 )
 from beadrod.models.tables.shape_spec import ShapeTable
 
-__all__ = [
-    "LAM_STAR", "work_of_adhesion", "scales", "transition_parameter", "cohesive_stress",
-    "lennard_jones_parameter", "angle_state", "reduced_slope", "end_angle",
-    "pull_off_angle", "angle_from_contact_radius", "angle_from_overlap", "angle_from_load",
-    "reduced_pull_off", "reduced_end_overlap", "reduced_force", "reduced_stiffness",
-    "pull_off_force", "minimum_overlap", "contact_radius", "contact_state",
-    "contact_radius_from_overlap", "force", "stiffness", "static_overlap",
-    "linear_stiffness", "linear_frequency", "shift_first_order", "modulus_from_frequency",
-    "overlap_from_frequency",
-]
+__all__: list[str] = []
 
 
 HERTZ_DECAY = 1.0

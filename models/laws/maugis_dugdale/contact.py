@@ -49,7 +49,7 @@ Region (finite values and gradients, tested): lam in [0.01, 200], gamma in [0.05
 J/m^2, E* of E in [150, 250] GPa, R of the 7.938 mm bead, delta from below delta_e to
 10^3 delta_0. theta is floored at 1e-7 (overlaps >~ 1e18 d_s: no load reaches it).
 
-The law object with its fast paths is :mod:`models.laws.maugis_dugdale`, which re-exports this
+The law object with its fast paths is :mod:`models.laws.maugis_dugdale`, built from this
 module; the tables and the parametric force (:mod:`models.laws.maugis_dugdale.static`,
 :mod:`models.laws.maugis_dugdale.orbit`) import this one, not the law, so no import runs in a
 circle.
