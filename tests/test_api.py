@@ -156,9 +156,11 @@ def test_compare_result(res):
     assert res.preferred in ("hertz", "none") and res.preferred_reason
     idata = res.idata["hertz"]
     assert "protocol" in idata.posterior.dims and "young" in idata.posterior
-    assert idata.posterior.sizes["chain"] == 2 and idata.posterior.sizes["draw"] == 30
+    assert (idata.posterior.sizes["chain"] == TINY["chains"]
+            and idata.posterior.sizes["draw"] == TINY["samples"])
     assert set(res.idata) == {"hertz", "baseline"}
-    assert res.result["config"]["sampling"]["warmup"] == 30  # the keywords, resolved
+    # the keywords, resolved
+    assert res.result["config"]["sampling"]["warmup"] == TINY["warmup"]
     # a fit that failed its gate (tiny counts) is marked in the table and warned about
     failed = list(table.loc[table["status"] != "ok", "law"])
     gate = [w for w in res.caught if "FAILED their gate" in w]
