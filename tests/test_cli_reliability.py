@@ -7,7 +7,6 @@ tiny counts: their numbers mean nothing, only what the command does with them.
 
 from __future__ import annotations
 
-import ast
 import json
 import logging
 import re
@@ -345,52 +344,28 @@ def test_quiet_shows_no_progress(tmp_path):
 
 
 def _workflows_imports() -> dict[str, set[str]]:
-    """module -> the workflows modules it imports (a package's name where a name taken
-    from it is not a module of its own)."""
-    root = ROOT / "workflows"
+    """module -> the workflows modules it imports (tests/test_layering.py's collector)."""
+    from test_layering import PACKAGES, collect
 
-    def module(dotted: str) -> str:
-        parts = dotted.split(".")[1:]
-        while parts and not ((root.joinpath(*parts).with_suffix(".py")).is_file()
-                             or (root.joinpath(*parts) / "__init__.py").is_file()):
-            parts.pop()
-        return ".".join(["workflows", *parts])
-
-    graph = {}
-    for path in root.rglob("*.py"):
-        rel = path.relative_to(ROOT).with_suffix("").parts
-        name = ".".join(rel[:-1] if rel[-1] == "__init__" else rel)
-        deps = set()
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom):
-                mod = (node.module or "").removeprefix("beadrod.")
-                if mod.startswith("workflows"):
-                    deps |= {module(f"{mod}.{a.name}") for a in node.names}
-            elif isinstance(node, ast.Import):
-                deps |= {module(a.name.removeprefix("beadrod.")) for a in node.names
-                         if a.name.removeprefix("beadrod.").startswith("workflows.")}
-        graph[name] = deps - {name, "workflows"}
+    _, imports, _ = collect(ROOT, PACKAGES)
+    graph: dict[str, set[str]] = {}
+    for imp in imports:
+        if imp.importer.startswith("workflows"):
+            graph.setdefault(imp.importer, set())
+            if imp.target.startswith("workflows.") and imp.target != imp.importer:
+                graph[imp.importer].add(imp.target)
     return graph
 
 
 def test_parallel_runs_what_it_is_handed_and_workflows_has_no_cycle():
+    from test_layering import Import, cycles
+
     g = _workflows_imports()
     assert g["workflows.pipeline.parallel"] <= {"workflows.runtime"}
     for mod in ("workflows.cli", "workflows.pipeline.parallel"):
         assert "workflows.commands.compare" not in g[mod] and "workflows.pipeline.fits" not in g[mod]
-    state: dict[str, int] = {}
-
-    def visit(m: str, path: tuple[str, ...]) -> None:
-        state[m] = 1
-        for d in g.get(m, ()):
-            assert state.get(d) != 1, f"import cycle: {' -> '.join(path + (d,))}"
-            if d not in state:
-                visit(d, path + (d,))
-        state[m] = 2
-
-    for m in g:
-        if m not in state:
-            visit(m, (m,))
+    edges = [Import(m, d, 0) for m, deps in g.items() for d in deps]
+    assert not cycles(edges), f"import cycles among workflows: {cycles(edges)}"
 
 
 # ------------------------------------------------------------ failed runs, leftovers
