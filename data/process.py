@@ -18,6 +18,14 @@ protocol whose first reference has no usable Q (an empty or NaN cell, or a curve
 -3 dB Q is not trustworthy) has Q_ref = NaN: its Q is left out of the likelihood, and
 ``warnings`` says how many (the fit logs them, the report shows the count). A dataset
 with no drive sweep left to fit (all excluded by the 2 % rule) is refused.
+
+A cell left empty where the amplitude observable needs it never fails the run and is
+never dropped silently: a drive sweep without ``drive_voltage_V`` keeps its shift and
+loses only its amplitude ratio; a drive sweep without ``amplitude_m`` has no x =
+delta_a/delta0 either, so it leaves the shift too (``excluded``, with the reason); a first
+reference without voltage or amplitude leaves its protocol's amplitude ratios without
+their anchor. Each such sweep is listed in ``amplitude_excluded`` (file line, column,
+reason) and counted in ``warnings``.
 The amplitude axis delta_a/delta0 takes delta0 from the Hertz law under the
 scene's load (the paper's convention) or from each protocol's measured f0.
 """
@@ -74,10 +82,13 @@ class ProcessedDataset:
     ``excluded`` lists the excluded drive rows with a ``reason``; ``references``
     every reference step with f0(n) and its relative drift from f0. ``notes`` say
     which cells the protocol leaves unused (nothing is dropped silently).
-    ``n_q_untrusted``: protocols whose first reference has no Q because its curve's
-    -3 dB Q is not trustworthy (counted in :attr:`n_q_missing` too). ``warnings``: what a
-    fit must tell the user about the data (protocols without Q, curve caveats), one line
-    each.
+    ``drive_amplitude_usable`` (N,): the sweeps whose amplitude ratio to their
+    protocol's first reference is defined (voltage and amplitude of both present);
+    ``amplitude_excluded``: the included sweeps that are not, one row each with the file
+    line, the empty column and the reason. ``n_q_untrusted``: protocols whose first
+    reference has no Q because its curve's -3 dB Q is not trustworthy (counted in
+    :attr:`n_q_missing` too). ``warnings``: what a fit must tell the user about the data
+    (protocols without Q, sweeps without an amplitude ratio, curve caveats), one line each.
     """
 
     protocol_ids: tuple[str, ...]
@@ -104,6 +115,18 @@ class ProcessedDataset:
     notes: tuple[str, ...] = ()  # table content the protocol does not use, and why
     n_q_untrusted: int = 0
     warnings: tuple[str, ...] = ()
+    drive_amplitude_usable: np.ndarray | None = None
+    amplitude_excluded: pd.DataFrame = field(default_factory=pd.DataFrame)
+
+    def __post_init__(self) -> None:
+        if self.drive_amplitude_usable is None:  # built by hand: usable where defined
+            usable = np.isfinite(np.asarray(self.drive_inv_q_shift, float))
+            object.__setattr__(self, "drive_amplitude_usable", usable)
+
+    @property
+    def n_amplitude_excluded(self) -> int:
+        """Included drive sweeps left out of the amplitude likelihood (a cell missing)."""
+        return int(np.count_nonzero(~self.drive_amplitude_usable))
 
     @property
     def n_drive(self) -> int:
@@ -207,10 +230,15 @@ def process(
                       f"has f0(n) = {r['f_res_Hz'][s]:.2f} Hz, |f0(n) - f0|/f0 = "
                       f"{abs(drift[s]):.2%} > {threshold:.0%} (f0 = {f0[p]:.2f} Hz)")
             reasons.update({int(i): reason for i in d_idx[~ok]})
-        keep[d_idx[ok]] = True
+        no_amp = np.isnan(num["amplitude_m"][d_idx])
+        reasons.update({int(i): _NO_AMPLITUDE for i in d_idx[ok & no_amp]})
+        keep[d_idx[ok & ~no_amp]] = True
     idx = np.flatnonzero(keep)
     if idx.size == 0:
         csv = Path(str(dataset.path)) / getattr(dataset, "csv_name", MEASUREMENTS)
+        if all(r == _NO_AMPLITUDE for r in reasons.values()):
+            raise DataError(f"{csv}: no drive sweep is left to fit: every drive sweep's "
+                            "amplitude_m is empty")
         raise DataError(f"{csv}: no drive sweep is left to fit: the 2 % rule excluded all "
                         f"{len(reasons)} (each protocol's reference drifted by more than "
                         f"{threshold:.0%} before its drive sweeps; --no-two-percent-rule "
@@ -220,6 +248,9 @@ def process(
     shift = fres / f_ref_of[idx] - 1.0
     # paper Eq. 31 against the protocol's first reference
     inv_q = (volt * a_ref[p_idx] / (v_ref[p_idx] * amp) - 1.0) / q_ref[p_idx]
+    usable, amp_excluded = _amplitude_usable(t, idx, p_idx, a_ref, v_ref, pids,
+                                             getattr(dataset, "csv_name", MEASUREMENTS))
+    inv_q = np.where(usable, inv_q, np.nan)
     ex_idx = np.array(sorted(reasons), dtype=np.int64)
     excluded = t.iloc[ex_idx].reset_index(drop=True).assign(
         reason=pd.Series([reasons[int(i)] for i in ex_idx], dtype=object))
@@ -233,11 +264,42 @@ def process(
         scene=dataset.scene, data_hash=dataset.data_hash, source=str(dataset.path),
         truth=dataset.truth, notes=_unused_notes(t, is_ref),
         n_q_untrusted=int(q_untrusted.sum()),
-        warnings=_warnings(t, pids, q_ref, q_untrusted, dataset),
+        warnings=_warnings(t, pids, q_ref, q_untrusted, dataset, amp_excluded),
+        drive_amplitude_usable=usable, amplitude_excluded=amp_excluded,
         references=pd.concat(ref_parts, ignore_index=True),
         options={"two_percent_rule": two_percent_rule, "shift_reference": shift_reference,
                  "threshold": threshold},
     )
+
+
+_NO_AMPLITUDE = ("amplitude_m is empty: the sweep has no x = delta_a/delta0 for the shift "
+                 "and no amplitude ratio")
+
+
+def _amplitude_usable(t: pd.DataFrame, idx: np.ndarray, p_idx: np.ndarray,
+                      a_ref: np.ndarray, v_ref: np.ndarray, pids: tuple[str, ...],
+                      csv: str) -> tuple[np.ndarray, pd.DataFrame]:
+    """Which included drive sweeps have an amplitude ratio to their first reference, and
+    a row naming the file line and the empty column for each one that has not."""
+    volt = t["drive_voltage_V"].to_numpy(np.float64)[idx]
+    no_volt = np.isnan(volt)
+    no_anchor = ~(np.isfinite(a_ref) & np.isfinite(v_ref))[p_idx]
+    rows = []
+    for k in np.flatnonzero(no_volt | no_anchor):
+        i = int(idx[k])
+        if no_volt[k]:
+            column, why = "drive_voltage_V", "drive_voltage_V is empty"
+        else:
+            p = int(p_idx[k])
+            column = "amplitude_m" if np.isnan(a_ref[p]) else "drive_voltage_V"
+            why = (f"the first reference of protocol {pids[p]!r} has no {column}, so "
+                   "its amplitude ratios have no anchor")
+        rows.append({"protocol": str(t["protocol"].iloc[i]), "step": int(t["step"].iloc[i]),
+                     "direction": str(t["direction"].iloc[i]), "line": int(t["line"].iloc[i]),
+                     "file": csv, "column": column,
+                     "reason": f"{why}: left out of the amplitude likelihood only"})
+    cols = ["protocol", "step", "direction", "line", "file", "column", "reason"]
+    return ~(no_volt | no_anchor), pd.DataFrame(rows, columns=cols)
 
 
 def _listed(items: list, n: int = 8) -> str:
@@ -245,11 +307,25 @@ def _listed(items: list, n: int = 8) -> str:
 
 
 def _warnings(t: pd.DataFrame, pids: tuple[str, ...], q_ref: np.ndarray,
-              q_untrusted: np.ndarray, dataset: Dataset) -> tuple[str, ...]:
+              q_untrusted: np.ndarray, dataset: Dataset,
+              amp_excluded: pd.DataFrame) -> tuple[str, ...]:
     """One line per thing a fit must say about these data: protocols whose reference Q
-    is missing (not in the likelihood) and sweeps whose peak fit fell back to the grid."""
+    is missing (not in the likelihood), sweeps without an amplitude ratio (not in the
+    amplitude likelihood) and sweeps whose peak fit fell back to the grid."""
     out = []
     csv = getattr(dataset, "csv_name", MEASUREMENTS)
+    if len(amp_excluded):
+        lines = sorted(int(x) for x in amp_excluded["line"])
+        out.append(f"amplitude: {len(lines)} drive sweeps have no amplitude ratio to their "
+                   f"first reference ({csv} line {_listed(lines)}; an empty "
+                   "drive_voltage_V or amplitude_m): they are left out of the amplitude "
+                   "likelihood only")
+    no_amp = (t["kind"] == "drive") & t["amplitude_m"].isna()
+    if no_amp.any():
+        lines = sorted(int(x) for x in t.loc[no_amp, "line"])
+        out.append(f"amplitude: {len(lines)} drive sweeps have an empty amplitude_m ({csv} "
+                   f"line {_listed(lines)}): no x for their shift, so they are excluded "
+                   "(listed with the reason)")
     missing = [pids[p] for p in np.flatnonzero(~np.isfinite(q_ref))]
     if missing:
         why = (f" ({int(q_untrusted.sum())} because the curve's -3 dB Q is not trustworthy)"

@@ -25,6 +25,7 @@ __all__ = [
     "DataError",
     "REQUIRED_COLUMNS",
     "OPTIONAL_COLUMNS",
+    "MAY_BE_EMPTY",
     "COLUMN_UNITS",
     "KINDS",
     "DIRECTIONS",
@@ -40,6 +41,9 @@ REQUIRED_COLUMNS: tuple[str, ...] = (
     "protocol", "step", "kind", "direction", "drive_voltage_V", "f_res_Hz", "amplitude_m",
 )
 OPTIONAL_COLUMNS: tuple[str, ...] = ("q_factor", "curve")
+MAY_BE_EMPTY: tuple[str, ...] = ("drive_voltage_V", "amplitude_m", "q_factor")
+"""Required columns whose cells may be empty (or NaN): a sweep without them is kept for
+what it can still give and reported (:func:`beadrod.data.process.process`)."""
 COLUMN_UNITS: dict[str, str] = {
     "protocol": "identifier", "step": "integer order within the protocol",
     "kind": "'reference' or 'drive'", "direction": "'up' or 'down'",
@@ -178,11 +182,15 @@ def validate_table(raw: pd.DataFrame, *, file: str, limits: Limits,
         # a row with a raw curve may leave the extracted quantities blank
         has_curve = raw["curve"].astype(str).str.strip() != ""
     for col in ("drive_voltage_V", "f_res_Hz", "amplitude_m"):
-        may_be_empty = has_curve is not None and col != "drive_voltage_V"
+        # a missing voltage or amplitude costs its sweep the amplitude likelihood (and a
+        # drive sweep without amplitude its x), which data.process reports row by row; a
+        # missing resonance frequency leaves nothing to fit, unless a curve gives it
+        optional = col in MAY_BE_EMPTY
+        may_be_empty = optional or has_curve is not None
         vals = _numeric(raw[col], file, col, ln, allow_empty=may_be_empty)
         for i, v in enumerate(vals):
             if math.isnan(v):
-                if not may_be_empty or not has_curve.iloc[i]:
+                if not optional and (has_curve is None or not has_curve.iloc[i]):
                     raise _fail(file, int(ln[i]), col,
                                 "value is empty (and no curve to extract it)")
                 continue
