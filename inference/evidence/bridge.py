@@ -35,8 +35,60 @@ the proposal draws.
 
 The estimate is only as good as the draws: a run that failed its diagnostics gate gives
 an untrustworthy bridge estimate, and the comparison table marks it so. The normal
-proposal suits unimodal posteriors (all of beadrod's models); a multimodal posterior
-shows as a large RE.
+proposal suits unimodal posteriors; a law with a loss term can have two modes.
+
+Reliability (``settings['reliable']``, with ``settings['reason']`` saying why not). From
+quantities the estimator already has, the estimate is flagged when
+
+* the relative error RE > 0.5 (``RE_MAX``), or RE is not finite: the first-order error
+  is meaningful only for RE << 1 (log(1 +- 0.5) is +0.41 / -0.69: the log Z error is
+  then neither symmetric nor small), and a 2-sigma band of +-1 nat spans the whole "not
+  worth more than a bare mention" grade of a Bayes factor (2 ln B < 2, Kass & Raftery
+  1995), so such an estimate cannot rank laws whatever its central value;
+* the chains disagree (a mode check that does not rely on tails): each chain is split
+  in halves (as split-R-hat does) and ``chain_separation`` is the largest Mahalanobis
+  distance between two halves' means in the unconstrained space, in units of the
+  pooled within-half covariance W. Above 2 (``SEPARATION_MAX``) the halves sit in
+  different places: a mixture of two equal normals with a common sd is bimodal exactly
+  when their means are more than 2 sd apart (Schilling, Watkins & Watkins 2002, Am.
+  Stat. 56, 223), so two halves that far apart look like two modes (or a chain that
+  has not converged), and the pooled draws weight the modes by chain counts, not by
+  mass. Halves that sample one mode have means that differ only by Monte Carlo noise,
+  D^2 ~ 2 chi2_d / ESS_half for one pair; a false alarm needs chi2_d > 2 ESS_half,
+  which does not happen once the per-half ESS is a few times the dimension d.
+
+Recorded, and deliberately not a criterion: the Pareto k-hat (``arviz.psislw``: the
+shape of a generalised Pareto distribution fitted to the largest weights, Zhang &
+Stephens 2009; Vehtari, Simpson, Gelman, Yao & Gabry 2024, "Pareto smoothed importance
+sampling", JMLR 25(72)) of the two raw importance weights the bridge combines:
+``pareto_k_proposal`` of e^l2 = q/g at the proposal draws (g misses posterior mass in
+its tails; the variational diagnostic of Yao, Vehtari, Simpson & Gelman 2018, "Yes, but
+did it work?", ICML) and ``pareto_k_posterior`` of e^-l1 = g/q at the posterior draws
+(g puts mass where the posterior has little), each with its sample-size-dependent
+threshold min(1 - 1/log10(S), 0.7) (``pareto_k_threshold_*``; for the autocorrelated
+posterior draws the tail length uses their relative efficiency ESS(f2)/N1). Micaletto &
+Vehtari (2025, "Bridge sampling diagnostics", arXiv:2508.14487) propose Pareto-k-hat
+diagnostics for bridge sampling. Why not a criterion here: k-hat judges g as an
+importance-sampling proposal, which the bridge does not need it to be, since its
+optimal bridge function caps both weights (f1 < 1/s1, f2 <= 1/s2). On the
+one-parameter posterior of a log-transformed scale (tests/test_evidence_reliability.py),
+skewed in u, one of the two k-hats, and mostly both, exceeds the threshold on every
+seed tried while the bridge is exact to its error of 0.005 nat; the k-hat of the
+bridge's capped summands f1, f2 does the same (a plateau of weights with a few 4x
+larger ones fits a heavy tail though the mean hardly moves); and on draws that mix
+between two modes the k-hat of g/q scatters across the threshold from run to run while
+the bridge is unbiased with an honest error. So k-hat would flag sound estimates and
+would not flag the bimodal failure more surely than the chain check does.
+
+A bimodal posterior whose draws mix between the modes (every chain visits both in the
+right proportions) is no failure: the bridge with its wide Normal stays unbiased and its
+RE covers the spread. Chains that sit in different modes are one, and the chain check
+flags them. What no check here can see: chains that all sample ONE of two modes. Their
+draws are a fine unimodal sample, the Normal fits them, RE, k-hat and the chain means
+are all healthy, and log Z misses the other mode's mass (log 2 for two mirror modes).
+Only draws or a search that reach the other mode reveal it (nested sampling; a
+multi-start mode search). A fixed point that is not reached raises RuntimeError (no
+estimate), as before.
 """
 
 from __future__ import annotations
@@ -55,7 +107,87 @@ from scipy.special import logsumexp
 from beadrod.inference.evidence.log_z import EvidenceResult, latent_site_names
 from beadrod.inference.model.unconstrained import flatten_unconstrained
 
-__all__ = ["bridge_sampling_log_z"]
+__all__ = [
+    "bridge_sampling_log_z",
+    "posterior_draws",
+    "pareto_k_hat",
+    "pareto_k_threshold",
+    "chain_separation",
+    "RE_MAX",
+    "SEPARATION_MAX",
+]
+
+RE_MAX = 0.5  # relative error of Z above which the estimate is unreliable (module docstring)
+SEPARATION_MAX = 2.0  # chain_separation [within-chain sd] above which the chains disagree
+
+
+def pareto_k_hat(log_weights: np.ndarray, *, reff: float = 1.0) -> float:
+    """Pareto k-hat of the weights e^log_weights: the shape of a generalised Pareto
+    distribution fitted to their largest values (``arviz.psislw``: tail length
+    min(S/5, 3 sqrt(S/reff)), Zhang & Stephens 2009 fit; Vehtari et al. 2024).
+
+    -inf entries are zero weights and stay in. Weights that are all equal have no tail:
+    -inf. Too few positive weights to fit a tail give +inf (arviz's convention).
+    """
+    lw = np.asarray(log_weights, dtype=float).ravel()
+    if np.any(np.isnan(lw)) or np.any(lw == np.inf):
+        raise ValueError("NaN or +inf among the log weights")
+    finite = lw[np.isfinite(lw)]
+    if finite.size == 0:
+        return float("inf")
+    if finite.size == lw.size and np.ptp(finite) == 0.0:
+        return float("-inf")
+    _, k = az.psislw(lw, reff=reff, normalize=False)
+    return float(k)
+
+
+def pareto_k_threshold(n: int) -> float:
+    """min(1 - 1/log10(n), 0.7): the largest k-hat at which a Monte Carlo (or importance
+    sampling) mean of n draws still has a small error with high probability (Vehtari et
+    al. 2024); 0.5 at n = 100, 0.67 at n = 1000, 0.7 from n = 2154 on."""
+    return float(min(1.0 - 1.0 / np.log10(n), 0.7))
+
+
+def chain_separation(flat: np.ndarray) -> float:
+    """Largest Mahalanobis distance between the means of the split chains of ``flat``
+    (chains, draws, dim), in units of their pooled within-half covariance.
+
+    Each chain is cut into a first and a second half, as for split-R-hat, so that one
+    chain that moved from one mode to another shows as well as two chains in different
+    modes. NaN when a half has fewer than two draws.
+    """
+    flat = np.asarray(flat, dtype=float)
+    c, n, d = flat.shape
+    h = n // 2
+    if h < 2:
+        return float("nan")
+    halves = np.concatenate([flat[:, :h], flat[:, n - h:]], axis=0)   # (2c, h, d)
+    means = halves.mean(axis=1)
+    cent = halves - means[:, None, :]
+    w = np.einsum("chi,chj->ij", cent, cent) / (2 * c * (h - 1))
+    # a (numerically) constant coordinate: a relative floor keeps W invertible
+    w = w + 1e-12 * (np.trace(w) / d + 1e-300) * np.eye(d)
+    chol = np.linalg.cholesky(w)
+    z = np.linalg.solve(chol, means.T).T                               # whitened means
+    diff = z[:, None, :] - z[None, :, :]
+    return float(np.sqrt(np.max(np.sum(diff * diff, axis=-1))))
+
+
+def posterior_draws(model: Callable, model_kwargs: dict, posterior: Mapping[str, Any],
+                    log_density: Any) -> tuple[dict[str, np.ndarray], Any]:
+    """(draws, log_density): every latent site's constrained draws (chains, draws, ...)
+    from a mapping or an InferenceData, whose ``sample_stats.lp`` serves as
+    ``log_density`` unless one is given."""
+    if hasattr(posterior, "posterior"):  # an InferenceData
+        stats = getattr(posterior, "sample_stats", None)
+        if log_density is None and stats is not None and "lp" in stats:
+            log_density = stats["lp"]
+        posterior = posterior.posterior
+    latents = latent_site_names(model, model_kwargs)
+    missing = [k for k in latents if k not in posterior]
+    if missing:
+        raise KeyError(f"posterior draws lack the latent site(s) {missing}")
+    return {k: np.asarray(posterior[k], dtype=float) for k in latents}, log_density
 
 
 def _iterate(l1: np.ndarray, l2: np.ndarray, *, tol: float = 1e-10,
@@ -93,7 +225,8 @@ def _program(model: Callable, model_kwargs: dict, chains: int, half: int, n2: in
     """The compiled part of bridge sampling: the draws mapped to the unconstrained space,
     split into the proposal's and the bridge's halves of each chain, the proposal's mean
     and Cholesky factor from the first halves, ``n2`` proposal draws and log q at them
-    (and at the bridge draws unless ``known``)."""
+    (and at the bridge draws unless ``known``), and all draws (chains, draws, dim) for
+    the chains' agreement."""
 
     def log_q(x, unravel):
         return -potential_energy(model, (), model_kwargs, unravel(x))
@@ -110,7 +243,8 @@ def _program(model: Callable, model_kwargs: dict, chains: int, half: int, n2: in
                                    + 1e-12 * jnp.eye(dim))
         prop = mean + jax.random.normal(key, (n2, dim)) @ chol.T
         lq = jax.vmap(lambda x: log_q(x, unravel))
-        return mean, chol, bridge, prop, (None if known else lq(bridge)), lq(prop)
+        return (mean, chol, bridge, prop, (None if known else lq(bridge)), lq(prop),
+                flat)
 
     return program
 
@@ -137,16 +271,7 @@ def bridge_sampling_log_z(
     """
     model_kwargs = model_kwargs or {}
     t0 = time.perf_counter()
-    if hasattr(posterior, "posterior"):  # an InferenceData
-        stats = getattr(posterior, "sample_stats", None)
-        if log_density is None and stats is not None and "lp" in stats:
-            log_density = stats["lp"]
-        posterior = posterior.posterior
-    latents = latent_site_names(model, model_kwargs)
-    missing = [k for k in latents if k not in posterior]
-    if missing:
-        raise KeyError(f"posterior draws lack the latent site(s) {missing}")
-    draws = {k: np.asarray(posterior[k], dtype=float) for k in latents}
+    draws, log_density = posterior_draws(model, model_kwargs, posterior, log_density)
     chains, n_draws = next(iter(draws.values())).shape[:2]
     if n_draws < 20:
         raise ValueError(f"bridge sampling needs >= 20 draws per chain, got {n_draws}")
@@ -159,7 +284,7 @@ def bridge_sampling_log_z(
     # one compiled program (one trace of the model): eagerly, the model's every operation
     # is dispatched (and its loops compiled) one by one, slow for the adhesive laws
     program = _program(model, model_kwargs, chains, half, n2, known)
-    mean, chol, bridge, prop, lq_bridge, lq_prop = (
+    mean, chol, bridge, prop, lq_bridge, lq_prop, flat = (
         None if a is None else np.asarray(a)
         for a in program(flat_draws, jax.random.PRNGKey(seed)))
     dim = mean.size
@@ -178,7 +303,30 @@ def bridge_sampling_log_z(
         raise RuntimeError("non-finite log density at a posterior draw: cannot bridge")
     log_z, iters = _iterate(l1, l2)
     re, ess = _relative_error(l1, l2, log_z, chains)
+    check = _reliability(l1, l2, re, ess, flat)
     wall = time.perf_counter() - t0
     return EvidenceResult("bridge_sampling", float(log_z), re, wall,
                           settings={"n_bridge": int(n1), "n_proposal": n2, "seed": seed,
-                                    "iterations": iters, "ess_f2": ess, "dim": int(dim)})
+                                    "iterations": iters, "ess_f2": ess, "dim": int(dim),
+                                    **check})
+
+
+def _reliability(l1: np.ndarray, l2: np.ndarray, re: float, ess: float,
+                 flat: np.ndarray) -> dict[str, Any]:
+    """The settings entries of the reliability check (module docstring)."""
+    n1, n2 = l1.size, l2.size
+    reff = min(max(ess / n1, 1.0 / n1), 1.0)  # posterior draws: autocorrelated
+    sep = chain_separation(flat)
+    reasons = []
+    if not np.isfinite(re):
+        reasons.append("relative error not finite")
+    elif re > RE_MAX:
+        reasons.append(f"relative error {re:.2f} > {RE_MAX}")
+    if sep > SEPARATION_MAX:  # NaN (too few draws) does not fire
+        reasons.append(f"chain halves' means {sep:.1f} within-chain sd apart "
+                       f"(> {SEPARATION_MAX:g}): more than one mode, or unconverged chains")
+    return {"pareto_k_proposal": pareto_k_hat(l2),
+            "pareto_k_posterior": pareto_k_hat(-l1, reff=reff),
+            "pareto_k_threshold_proposal": pareto_k_threshold(n2),
+            "pareto_k_threshold_posterior": pareto_k_threshold(n1),
+            "chain_separation": sep, "reliable": not reasons, "reason": "; ".join(reasons)}
