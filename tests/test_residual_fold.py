@@ -37,7 +37,7 @@ def folded(inputs):
     from beadrod.inference.speed import fold as F
 
     law = get_law(LAW)
-    sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone"), inputs, inputs["f0"])
+    sweeps = SweepCurve(law, ModelSpec(law=LAW, rung="backbone", shift_noise="constant"), inputs, inputs["f0"])
     F._CACHE.clear()
     got = []
 
@@ -112,8 +112,8 @@ def test_folded_model_has_the_exact_log_density(folded, inputs):
     """The model's log joint with and without the fold at points of usable cells (noise
     and offset as the fold's bound states them): within TOL."""
     _, fold, _ = folded
-    with_fold = build_model(ModelSpec(law=LAW, rung="backbone"))
-    exact = build_model(ModelSpec(law=LAW, rung="backbone", fold=False))
+    with_fold = build_model(ModelSpec(law=LAW, rung="backbone", shift_noise="constant"))
+    exact = build_model(ModelSpec(law=LAW, rung="backbone", fold=False, shift_noise="constant"))
     z, usable = _points(fold, np.random.default_rng(13), 40)
     z = z[usable][:12]
     dens = [jax.jit(lambda p, m=m: log_density(m, (inputs,), {}, p)[0])
@@ -136,7 +136,7 @@ def test_pointwise_likelihood_is_the_exact_one(inputs):
     """A model whose sweep likelihood is folded still gives LOO its per-sweep
     log-likelihood, when asked (data[POINTWISE]): the exact sites sum to the folded
     factor within TOL at a point of the fold."""
-    model = build_model(ModelSpec(law=LAW, rung="backbone"))
+    model = build_model(ModelSpec(law=LAW, rung="backbone", shift_noise="constant"))
     values = get_law(LAW).sampler_values({"young": 2e11, "gamma": 0.03, "lam": 2.0})
     values.update(delta0_scatter=0.1, sigma_shift=0.0137, offset_down=0.0)
 

@@ -26,6 +26,7 @@ __all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFER
 # the fit rungs, from the one list of rungs (models.rungs imports no JAX, so the CLI builds
 # its parsers without starting it)
 RUNGS = FIT_RUNGS
+SHIFT_NOISES = ("protocol", "constant")  # inference.model.shift_noise.SHIFT_NOISES
 # data.process.process(shift_reference=...): the reference sweep each shift is taken against
 SHIFT_REFERENCES = ("first", "preceding")
 
@@ -68,6 +69,7 @@ DEFAULTS: dict[str, Any] = {
         "use_q": True,  # reference Q enters the likelihood where a law predicts Q
         "two_percent_rule": True,
         "shift_reference": "first",  # first | preceding reference sweep
+        "shift_noise": "protocol",  # protocol | constant (inference.model.shift_noise)
     },
     # paper_rung: also run the tension under the paper's Eq. 25 (3 extra NUTS fits)
     "tension": {"enabled": True, "paper_rung": True},
@@ -110,6 +112,9 @@ DESCRIPTIONS: dict[str, str] = {
                                    "drifted by more than 2 % (the paper's rule)",
     "likelihood.shift_reference": "reference of each Delta f/f0: " + " | ".join(
         SHIFT_REFERENCES) + " reference sweep of the protocol",
+    "likelihood.shift_noise": "noise of the shifts: protocol (a floor, a part growing with "
+                              "the shift, an offset shared by a protocol's sweeps) | "
+                              "constant (one sd for all)",
     "tension.enabled": "run the Q-versus-shift tension analysis (needs both viscoelastic "
                        "laws and use_q)",
     "tension.paper_rung": "also run the tension under the paper's Eq. 25 (3 extra NUTS fits)",
@@ -292,6 +297,7 @@ def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None
     _choice(cfg["rung"], "rung", RUNGS)
     _choice(cfg["likelihood"]["shift_reference"], "likelihood.shift_reference",
             SHIFT_REFERENCES)
+    _choice(cfg["likelihood"]["shift_noise"], "likelihood.shift_noise", SHIFT_NOISES)
     methods = cfg["evidence"]["methods"]
     if not isinstance(methods, list) or not methods:
         raise ConfigError("evidence.methods must list at least one of "

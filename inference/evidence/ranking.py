@@ -164,11 +164,31 @@ def rank_evidence(entries: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def _protocol_shift_pit(idata: az.InferenceData) -> np.ndarray:
+    # the shifts of a protocol share an offset: their leave-one-out predictive is the
+    # conditional Normal given the protocol's other sweeps, not the posterior predictive
+    # draws (which az.loo_pit would read)
+    from beadrod.inference.model.shift_noise import loo_pit
+
+    post = idata.posterior
+    flat = post.stack(sample=("chain", "draw"))
+    # only the grouping matters: protocols in order of first appearance
+    ids, proto = np.unique(np.asarray(post["sweep_protocol"]), return_inverse=True)
+    ll = idata.log_likelihood["shift_obs"].stack(sample=("chain", "draw"))
+    return loo_pit(np.asarray(idata.observed_data["shift_obs"]),
+                   np.asarray(flat["shift_pred"].transpose("sample", "sweep")),
+                   *(np.asarray(flat[k]) for k in ("sigma_shift", "kappa_shift",
+                                                    "tau_shift")),
+                   proto, len(ids), np.asarray(ll.transpose("sample", "sweep")))
+
+
 def loo_pit_summary(idata: az.InferenceData, var_name: str = "shift_obs") -> dict[str, Any]:
     """Calibration of the leave-one-out predictive of ``var_name`` (LOO-PIT).
 
     PIT_i = P(y_rep,i <= y_i | y_-i), uniform on [0, 1] for a calibrated model
-    (Gelfand et al. 1992; Gabry et al. 2019). Returned: the Kolmogorov-Smirnov distance
+    (Gelfand et al. 1992; Gabry et al. 2019). Under the shifts' ``protocol`` noise model
+    the sweeps of a protocol are not independent, and PIT_i is the conditional Normal's
+    (:func:`inference.model.shift_noise.loo_pit`). Returned: the Kolmogorov-Smirnov distance
     ``ks_d`` to the uniform and its p-value ``ks_p`` (``calibrated``: p >= LOO_PIT_P_MIN);
     ``tails``, the share of PIT values below 0.05 or above 0.95 (0.10 if calibrated;
     more: the predictive is too narrow, fewer: too wide); ``mean`` (0.5 if calibrated;
@@ -178,7 +198,10 @@ def loo_pit_summary(idata: az.InferenceData, var_name: str = "shift_obs") -> dic
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        pit = np.asarray(az.loo_pit(idata, y=var_name), float).ravel()
+        if var_name == "shift_obs" and "tau_shift" in idata.posterior:
+            pit = _protocol_shift_pit(idata)
+        else:
+            pit = np.asarray(az.loo_pit(idata, y=var_name), float).ravel()
     pit = pit[np.isfinite(pit)]
     if pit.size == 0:
         raise ValueError(f"no finite LOO-PIT values for {var_name!r}")

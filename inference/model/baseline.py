@@ -19,6 +19,8 @@ import numpyro.distributions as dist
 
 from beadrod.inference.model.likelihood import observe_logq, observe_shift
 from beadrod.inference.model.priors import prior
+from beadrod.inference.model.shift_noise import ProtocolShift, noise_variance
+from beadrod.inference.speed.residual_fold import POINTWISE
 from beadrod.inference.speed.residual_fold import log_likelihood as residual_log_likelihood
 from beadrod.models.scene import materials
 
@@ -46,14 +48,33 @@ def nuisance_q(spec: Any, data: dict) -> None:
 
 def observe_drive(spec: Any, curve: jnp.ndarray, data: dict,
                   sums: jnp.ndarray | None = None) -> None:
-    """shift_obs ~ Normal|StudentT(curve + offset_down * direction, sigma_shift). With
-    ``sums``, the residual sums (S0, S1) of a Normal likelihood's curve
+    """The measured shifts around s = curve + offset_down * direction.
+
+    ``spec.shift_noise == "protocol"`` (:mod:`inference.model.shift_noise`): a floor
+    ``sigma_shift``, a part ``kappa_shift`` |s| and an offset ``tau_shift`` shared by a
+    protocol's sweeps (Normal; with the Student-t option the sweeps are independent
+    Student-t of scale sqrt(sigma^2 + (kappa s)^2) and there is no shared offset).
+    ``"constant"``: shift_obs ~ Normal|StudentT(s, sigma_shift). With ``sums`` (constant
+    Normal noise only), the residual sums (S0, S1) of the curve
     (:mod:`inference.speed.residual_fold`): the same log density as one factor
     ('shift_obs_folded') instead of a site per sweep; ``curve`` then enters only the
     deterministic 'shift_pred'."""
     offset = numpyro.sample("offset_down", prior("offset_down", spec.overrides))
     sigma = numpyro.sample("sigma_shift", prior("sigma_shift", spec.overrides))
     pred = numpyro.deterministic("shift_pred", curve + offset * data["direction"])
+    if spec.shift_noise == "protocol":
+        kappa = numpyro.sample("kappa_shift", prior("kappa_shift", spec.overrides))
+        var = noise_variance(pred, sigma=sigma, kappa=kappa)
+        if spec.likelihood == "normal":
+            tau = numpyro.sample("tau_shift", prior("tau_shift", spec.overrides))
+            with numpyro.plate("sweeps", pred.shape[0]):
+                numpyro.sample("shift_obs", ProtocolShift(
+                    pred, var, tau, data["proto"], data["n_protocols"],
+                    pointwise=bool(data.get(POINTWISE))), obs=data["shift"])
+            return
+        observe_shift(pred, jnp.sqrt(var), data["shift"], likelihood=spec.likelihood,
+                      df=spec.student_df)
+        return
     if sums is None:
         observe_shift(pred, sigma, data["shift"], likelihood=spec.likelihood,
                       df=spec.student_df)

@@ -96,6 +96,7 @@ from beadrod.inference.model.baseline import (
 from beadrod.inference.model.likelihood import observe_logq
 from beadrod.inference.model.overlap import MeasuredF0, invert_log_overlap, log_overlap
 from beadrod.inference.model.priors import law_prior, prior
+from beadrod.inference.model.shift_noise import DEFAULT_SHIFT_NOISE, SHIFT_NOISES
 from beadrod.inference.speed.residual_fold import POINTWISE, ResidualFold, sums
 from beadrod.inference.speed.steps import StepFold, SweepCurve, step_fold
 from beadrod.models.law import RungUnavailable, sampler_site
@@ -141,6 +142,7 @@ class ModelSpec:
     use_f0: bool = True
     likelihood: str = "normal"
     student_df: float = 4.0
+    shift_noise: str = DEFAULT_SHIFT_NOISE
     f0_sd: float = 5.0
     fold: bool = True
     overrides: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
@@ -164,6 +166,9 @@ class ModelSpec:
                 f"{list(get_law(self.law).physics.rungs)}")
         if self.likelihood not in ("normal", "student_t"):
             raise ValueError("likelihood must be 'normal' or 'student_t'")
+        if self.shift_noise not in SHIFT_NOISES:
+            raise ValueError(f"shift_noise must be one of {list(SHIFT_NOISES)}, got "
+                             f"{self.shift_noise!r}")
 
     @property
     def name(self) -> str:
@@ -172,6 +177,8 @@ class ModelSpec:
             parts.append(self.rung)
         if self.likelihood != "normal":
             parts.append(self.likelihood)
+        if self.shift_noise != DEFAULT_SHIFT_NOISE:
+            parts.append(f"{self.shift_noise}-noise")
         if not self.use_shift:
             parts.append("no-shift")
         if not self.use_q:

@@ -12,8 +12,16 @@ latent site to Uniform(0, 1) through it), and all are proper (evidence needs tha
 - ``delta0_scatter`` ~ HalfNormal(0.3): protocol-to-protocol scatter of log delta0
   (remounting the bead changes the contact); 0.3 in log is a 30 % overlap change,
   i.e. 15 % in f0 (delta0 ~ f0^-2 at fixed load), more than the observed ~5 % f0 scatter.
-- ``sigma_shift`` ~ HalfNormal(0.01): Delta f/f0 of the drive sweeps is at most ~0.1;
-  a 1 % scatter is generous for a peak frequency.
+- ``sigma_shift`` ~ HalfNormal(0.01): the floor of the shift noise
+  (:mod:`inference.model.shift_noise`). Delta f/f0 of the drive sweeps is at most ~0.1;
+  a 1 % scatter is generous for a peak frequency (2 Hz at 2.7 kHz is 7e-4).
+- ``kappa_shift`` ~ HalfNormal(0.25): the part of the shift noise that grows with the
+  shift, as a fraction of it: the up/down difference of a bent peak and the contact's
+  wear between steps are a tenth of the shift or so; a quarter is generous, and zero (no
+  such part) is the mode.
+- ``tau_shift`` ~ HalfNormal(0.005): the offset every shift of a protocol shares through
+  its first reference (the reference's own peak error, 1-2 Hz, is 4-7e-4 of 2.7 kHz; a
+  drift before the first drive adds to it); 0.005 (13 Hz) is generous.
 - ``offset_down`` ~ Normal(0, 0.005): softening resonances peak lower in a downward
   sweep (the jump is delayed); the per-direction offset absorbs that hysteresis.
   ``offset_down`` and ``mu_f0`` are Normals sampled in (x - loc)/scale
@@ -72,6 +80,8 @@ class LogUniformLogit(dist.LogUniform):
 PRIORS: dict[str, dist.Distribution] = {
     "delta0_scatter": dist.HalfNormal(0.3),
     "sigma_shift": dist.HalfNormal(0.01),
+    "kappa_shift": dist.HalfNormal(0.25),
+    "tau_shift": dist.HalfNormal(0.005),
     "offset_down": ScaledNormal(0.0, 0.005),
     "sigma_logq": dist.HalfNormal(1.0),
     "mu_logq": dist.Normal(math.log(50.0), 1.5),

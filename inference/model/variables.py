@@ -49,7 +49,11 @@ VARIABLES: dict[str, VariableInfo] = {
                                     "drive sweep, down-sweep offset included"),
     "shift_obs": VariableInfo("1", "measured relative frequency shift Delta f/f0 of each "
                                    "drive sweep"),
-    "sigma_shift": VariableInfo("1", "standard deviation of the shift noise"),
+    "sigma_shift": VariableInfo("1", "floor of the shift noise (standard deviation)"),
+    "kappa_shift": VariableInfo("1", "part of the shift noise that grows with the shift, "
+                                     "as a fraction of it"),
+    "tau_shift": VariableInfo("1", "standard deviation of the offset all shifts of a "
+                                   "protocol share through its first reference"),
     "offset_down": VariableInfo("1", "extra shift of down sweeps (delayed jump of a "
                                      "softening resonance)"),
     # quality factor

@@ -139,8 +139,9 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
     fits_curve = spec.rung in law.physics.shifts
     if spec.use_shift and not fits_curve:
         return None                      # the generic quadrature is not folded
+    # the residual sums hold the constant Normal noise's likelihood only
     observed = (data.get("shift") is not None and data.get("direction") is not None
-                and spec.likelihood == "normal")
+                and spec.likelihood == "normal" and spec.shift_noise == "constant")
 
     def make():
         with jax.ensure_compile_time_eval():
@@ -178,7 +179,7 @@ def step_fold(sweeps: SweepCurve, data: dict) -> StepFold | ResidualFold | None:
 
     key = (law.name, spec.rung, spec.use_shift, repr(law.params),
            repr(sorted(spec.overrides.items())), repr(sorted(data["scene"].items())),
-           spec.likelihood, np.asarray(sweeps.f0), np.asarray(data["amplitude"]),
+           spec.likelihood, spec.shift_noise, np.asarray(sweeps.f0), np.asarray(data["amplitude"]),
            np.asarray(sweeps.position),
            None if data.get("shift") is None else np.asarray(data["shift"]),
            None if data.get("direction") is None else np.asarray(data["direction"]))

@@ -126,7 +126,8 @@ def fitted_specs(runs: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
             # the rung the law was fitted at (its summary says), not the default
             rung = run.summary.get("rung") or cfg.get("rung", "backbone")
             try:
-                spec = comparison_specs([name], rung, lik)[name]
+                spec = comparison_specs([name], rung, lik, shift_noise=str(
+                    cfg.get("likelihood", {}).get("shift_noise", "protocol")))[name]
             except (ValueError, KeyError) as exc:
                 log.warning("figures: no model spec for %s (%s); its curves are left out",
                             name, exc)

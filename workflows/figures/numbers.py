@@ -64,7 +64,8 @@ def shift_panel(name: str, label: str, spec: Any, idata: Any, inputs: dict[str, 
 
     The curve is the noise-free up-sweep shift on a log-spaced grid of x = δa/δ0 (plus
     x = 0); the predictive band adds the likelihood's noise (Normal or Student-t with
-    the draw's σ_shift, ``replicates`` noise values per draw); down sweeps add the draw's
+    the draw's sd, ``replicates`` noise values per draw: sqrt(σ² + (κ s)² + τ²) under the
+    protocol noise model, σ_shift under the constant one); down sweeps add the draw's
     ``offset_down``. Residuals are standardised by the posterior predictive draws of each
     sweep.
     """
@@ -87,7 +88,12 @@ def shift_panel(name: str, label: str, spec: Any, idata: Any, inputs: dict[str, 
         eps = rng.standard_t(float(getattr(spec, "student_df", 4.0)), size=shape)
     else:
         eps = rng.standard_normal(shape)
-    pred = (curves[None] + sigma[None, :, None] * eps).reshape(-1, curves.shape[1])
+    # the noise model's sd along the curve: a floor, a part growing with the shift and
+    # (a new protocol's) shared offset (inference.model.shift_noise); 0 where absent
+    kappa = _flat(post, "kappa_shift").ravel() if "kappa_shift" in post else 0.0 * sigma
+    tau = _flat(post, "tau_shift").ravel() if "tau_shift" in post else 0.0 * sigma
+    scale = np.sqrt(sigma[:, None] ** 2 + (kappa[:, None] * curves) ** 2 + tau[:, None] ** 2)
+    pred = (curves[None] + scale[None] * eps).reshape(-1, curves.shape[1])
     q05, q50, q95 = np.quantile(curves, [0.05, 0.5, 0.95], axis=0)
     p05, p95 = np.quantile(pred, [0.05, 0.95], axis=0)
     down = None if offset is None else np.median(curves + offset[:, None], axis=0)

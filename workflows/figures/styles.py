@@ -248,6 +248,7 @@ def tex(text: str) -> str:
 _NUISANCE = {
     "delta0": r"$\delta_0$", "delta0_scatter": r"$\sigma_{\ln\delta_0}$",
     "delta0_ref_log": r"$\ln\delta_{0,\mathrm{ref}}$", "sigma_shift": r"$\sigma_\mathrm{shift}$",
+    "kappa_shift": r"$\kappa_\mathrm{shift}$", "tau_shift": r"$\tau_\mathrm{shift}$",
     "offset_down": r"$\Delta_\mathrm{down}$", "sigma_logq": r"$\sigma_{\ln Q}$",
     "mu_logq": r"$\mu_{\ln Q}$", "tau_logq": r"$\tau_{\ln Q}$", "mu_f0": r"$\mu_{f_0}$",
     "tau_f0": r"$\tau_{f_0}$", "amp": r"$a_\mathrm{base}$", "power": r"$p_\mathrm{base}$",

@@ -39,7 +39,8 @@ def beadrod_version() -> str:
 # Units of the comparison's nuisance parameters; the laws' own parameters carry theirs
 # (models.law.Param) and the baseline's are dimensionless but for mu_f0/tau_f0.
 NUISANCE_UNITS = {
-    "delta0_scatter": "-", "sigma_shift": "-", "offset_down": "-", "sigma_logq": "-",
+    "delta0_scatter": "-", "sigma_shift": "-", "kappa_shift": "-", "tau_shift": "-",
+    "offset_down": "-", "sigma_logq": "-",
     "amp": "-", "a_ref": "-", "power": "-", "mu_f0": "Hz", "tau_f0": "Hz", "mu_logq": "-",
     "tau_logq": "-",
 }
@@ -94,7 +95,7 @@ def __getattr__(name: str) -> Any:
 
 
 def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
-                     use_q: bool = True) -> dict[str, Any]:
+                     use_q: bool = True, shift_noise: str = "protocol") -> dict[str, Any]:
     """ModelSpec per requested name, every law at the same ``rung`` (the baseline has no
     rung). A law that cannot run at ``rung`` is refused with a clear message, never
     swapped for another rung."""
@@ -124,7 +125,8 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
         have = {n: list(get_law(n).physics.rungs) for n in lacking}
         raise ValueError(f"law(s) {lacking} cannot be fitted at rung '{rung}' (their rungs: "
                          f"{have}); choose another --rung or leave them out with --laws")
-    return {name: ModelSpec(law=name, rung=rung, likelihood=likelihood, use_q=use_q)
+    return {name: ModelSpec(law=name, rung=rung, likelihood=likelihood, use_q=use_q,
+                            shift_noise=shift_noise)
             for name in names}
 
 

@@ -118,16 +118,17 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
     from beadrod.workflows.pipeline.parallel import Job
 
     shared, split = _pair(pair)
+    noise = str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))
     jobs = [Job("tension:eta_q", "eta", "eta_q",
-                {"law": shared, "rung": rung, "likelihood": lik, "use_shift": False}, cfg,
-                seed_offset=12)]
-    shift_alone = {"law": shared, "likelihood": lik, "use_q": False}
+                {"law": shared, "rung": rung, "likelihood": lik, "use_shift": False,
+                 "shift_noise": noise}, cfg, seed_offset=12)]
+    shift_alone = {"law": shared, "likelihood": lik, "use_q": False, "shift_noise": noise}
     if rung in ETA_IN_SHIFT:
         jobs.append(Job(f"tension:eta_shift:{rung}", "eta", "eta_shift",
                         {"rung": rung, **shift_alone}, cfg, seed_offset=11))
     elif cfg["tension"].get("paper_rung", True):
         for name in (shared, split):
-            spec = ModelSpec(law=name, rung="paper_eq25", likelihood=lik)
+            spec = ModelSpec(law=name, rung="paper_eq25", likelihood=lik, shift_noise=noise)
             jobs.append(Job(f"tension:{name}", "fit", f"{name}_paper_eq25", spec,
                             _paper_cfg(cfg), str(out / "tension")))
         jobs.append(Job("tension:eta_shift:paper_eq25", "eta", "eta_shift",

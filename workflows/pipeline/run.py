@@ -54,7 +54,13 @@ def model_specs(cfg: dict[str, Any], names: list[str] | None,
     model (likelihood.robust) and whether Q enters the likelihood (likelihood.use_q)."""
     lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
     return comparison_specs(names, rung or cfg["rung"], lik,
-                            use_q=bool(cfg["likelihood"]["use_q"]))
+                            use_q=bool(cfg["likelihood"]["use_q"]),
+                            shift_noise=shift_noise(cfg))
+
+
+def shift_noise(cfg: dict[str, Any]) -> str:
+    """The shifts' noise model the configuration asks for (likelihood.shift_noise)."""
+    return str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))
 
 
 def job_steps(job: Job) -> int:

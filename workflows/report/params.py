@@ -81,8 +81,12 @@ PARAMETERS: dict[str, Param] = {
     "delta0_scatter": Param("s_δ0", meaning="protocol-to-protocol sd of ln δ0_p about "
                                             "ln δ0,ref (remounting the bead changes the "
                                             "contact's stiffness scale)"),
-    "sigma_shift": Param("σ_shift", meaning="noise sd of the measured Δf/f0 of one drive "
-                                            "sweep"),
+    "sigma_shift": Param("σ_shift", meaning="floor of the noise sd of the measured Δf/f0 "
+                                            "of one drive sweep"),
+    "kappa_shift": Param("κ_shift", meaning="part of the shift noise that grows with the "
+                                            "shift, as a fraction of it (bent peaks, wear)"),
+    "tau_shift": Param("τ_shift", meaning="sd of the offset all shifts of a protocol share "
+                                          "through its first reference sweep"),
     "offset_down": Param("o_down", meaning="constant offset of Δf/f0 in down sweeps against "
                                            "up sweeps (the delayed jump of a softening "
                                            "resonance)"),

@@ -39,6 +39,9 @@ _NOTES: dict[str, dict[str, str]] = {
              "contact",
         "gamma": "no truth: the world has no adhesion",
         "sigma_shift": "no truth: " + _NO_SCATTER_MODEL,
+        "kappa_shift": "no truth: " + _NO_SCATTER_MODEL,
+        "tau_shift": "no truth: the first reference's 2 Hz noise and drift are shared by "
+                     "the protocol's shifts, but not as one Gaussian offset",
         "offset_down": "no truth: down sweeps read s (1 + h x) with h = 0.15, a "
                        "multiplicative split, not a constant offset",
         "amp": "no truth: " + _BASELINE, "power": "no truth: " + _BASELINE,
@@ -54,6 +57,10 @@ _NOTES: dict[str, dict[str, str]] = {
         "gamma": "no truth: the world has no adhesion",
         "sigma_shift": "no truth: the shift noise is 1 % vibrometer noise on each curve, "
                        "read through a peak fit: no single Gaussian scale",
+        "kappa_shift": "no truth: the shift noise is vibrometer noise read through a peak "
+                       "fit, not a set fraction of the shift",
+        "tau_shift": "no truth: the first reference's error is shared by the protocol's "
+                     "shifts, but it comes from a peak fit, not one Gaussian offset",
         "offset_down": "no truth: up and down sweeps differ by the harmonic-balance "
                        "hysteresis, not by a set offset",
         "amp": "no truth: " + _BASELINE, "power": "no truth: " + _BASELINE,
