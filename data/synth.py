@@ -41,6 +41,8 @@ DEFAULT_SEED = 441
 WORLDS: dict[str, str] = {
     "paper_like": "phenomenological stand-in for the paper's 28 protocols (default)",
     "hertz_dynamics": "physical: harmonic-balance stepped sweeps of a damped Hertz contact",
+    "hysteretic": "physical: Hertz with Masing hysteresis, loss growing with the "
+                  "amplitude (data.worlds_loss)",
 }
 
 _PAPER_LIKE = {
@@ -345,8 +347,14 @@ def generate(
     """(measurement table, scene dict, truth dict) of a synthetic world."""
     if world not in WORLDS:
         raise ValueError(f"unknown world {world!r}; known: {', '.join(WORLDS)}")
-    table, scene_dict, truth = (_hertz_dynamics if world == "hertz_dynamics"
-                                else _paper_like)(int(seed))
+    if world == "hysteretic":
+        from beadrod.data.worlds_loss import hysteretic
+
+        scene, scene_dict = _paper_scene(world)
+        table, scene_dict, truth = hysteretic(int(seed), scene, scene_dict)
+    else:
+        table, scene_dict, truth = (_hertz_dynamics if world == "hertz_dynamics"
+                                    else _paper_like)(int(seed))
     return table, scene_dict, _rounded(truth)
 
 

@@ -249,6 +249,18 @@ class Physics:
     ``table``: the specification of the law's stored backbone table
     (:class:`models.tables.shape_spec.ShapeTable`), for a law whose exact backbone depends
     on a shape parameter at a given load; None where the law has no such table.
+
+    The loss, in L(x) = q(x)/k0 [-] (the quadrature stiffness at amplitude x over the
+    linear stiffness; 1/Q at x -> 0), which the resonance amplitude per volt measures
+    (docs/damping.md):
+
+    * ``loss_exponent``: how the law's own linear loss scales with the resonance,
+      L0 Omega^beta (Kuwabara-Kono damping: 3, as q = A omega k_eq and k_eq = m omega^2 on
+      the backbone). None: the law has no loss of its own; the comparison gives it the
+      background loss L0 Omega^beta with beta fitted (from 0, a constant loss factor, to 3,
+      radiation into the rod).
+    * ``loss_increment(x, **kw)`` -> the loss the law adds that grows with the amplitude,
+      Delta L(x) [-] (hysteresis: h rho(m) x^(m-1)); None: none.
     """
 
     force: Callable[..., Any]
@@ -263,6 +275,8 @@ class Physics:
     domains: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     prepared: tuple[Prepared, ...] = ()
     table: Any = None
+    loss_exponent: float | None = None
+    loss_increment: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -484,6 +498,23 @@ class ContactLaw:
         :meth:`shift`); None where the rung has no limited domain."""
         fn = self.physics.domains.get(rung) if rung in self.physics.shifts else None
         return None if fn is None else fn(jnp.asarray(x, float), **kw)
+
+    def loss(self, x: Any, *, linear_loss: Any, omega_ratio: Any,
+             background_exponent: Any = 0.0, **kw: Any) -> Any:
+        """L(x) = q(x)/k0 [-] at amplitude x = delta_a/delta0: the linear loss
+        ``linear_loss`` (1/Q0) scaled by the resonance ratio ``omega_ratio`` to the law's
+        ``loss_exponent`` (else ``background_exponent``), plus its ``loss_increment``."""
+        beta = (background_exponent if self.physics.loss_exponent is None
+                else self.physics.loss_exponent)
+        out = linear_loss * omega_ratio ** beta
+        if self.physics.loss_increment is not None:
+            out = out + self.physics.loss_increment(x, **kw)
+        return out
+
+    @property
+    def has_own_loss(self) -> bool:
+        """True where the law's loss is its own (no fitted background exponent)."""
+        return self.physics.loss_exponent is not None
 
     def quality_factor(self, **kw: Any) -> Any:
         """Linear Q [-] at ``omega0`` [rad/s]."""

@@ -260,3 +260,17 @@ def test_one_mode_of_two_is_invisible():
         assert r.settings["reliable"], r.settings
         assert abs(r.log_z - (ref - np.log(2.0))) < 3 * r.log_z_err + 0.02, (r, ref)
         assert ref - r.log_z > 0.6  # the missing mode's mass, far outside the error bar
+
+
+def test_bridge_equation_root_found_where_the_fixed_point_creeps():
+    # proposal and posterior barely overlapping: the fixed point crawls; the bracketed
+    # root of the same equation is the fully iterated one
+    from beadrod.inference.evidence.bridge import _iterate
+
+    rng = np.random.default_rng(2)
+    l1 = rng.normal(3.0, 4.0, 60)
+    l2 = rng.normal(-9.0, 6.0, 60)
+    full, iters = _iterate(l1, l2, max_iter=200_000)
+    assert iters > 5
+    bracketed, _ = _iterate(l1, l2, max_iter=3)
+    assert bracketed == pytest.approx(full, abs=1e-8)

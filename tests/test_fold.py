@@ -116,7 +116,8 @@ def test_folded_model_has_the_exact_log_density(name, use_shift, inputs):
         params = {k: float(d.icdf(jnp.asarray(rng.uniform(0.05, 0.95))))
                   for k, d in priors.items()}
         params.update(delta0_scatter=0.1, sigma_shift=0.0137, offset_down=0.0,
-                      kappa_shift=0.1, tau_shift=1e-3, mu_logq=np.log(50.0), tau_logq=0.5)
+                      kappa_shift=0.1, tau_shift=1e-3, mu_logq=np.log(50.0), tau_logq=0.5,
+                      loss_exponent=1.0, sigma_amp=0.02, tau_amp=0.01, offset_amp_down=0.0)
         a, b = (d(params) for d in dens)
         assert np.isfinite(a) == np.isfinite(b)
         if np.isfinite(b):

@@ -120,7 +120,13 @@ def test_every_builtin_law_lists_every_ladder_rung():
     from beadrod.models.registry import get_law, law_names
 
     for name in law_names():
-        assert set(LADDER) <= set(get_law(name).physics.rungs), name
+        law = get_law(name)
+        if law.physics.loss_increment is not None:
+            # a loss that grows with the amplitude (hysteresis) is not in the force, which
+            # is all the generic rungs integrate: such a law offers its closed forms only
+            assert set(law.physics.rungs) == set(law.physics.shifts), name
+            continue
+        assert set(LADDER) <= set(law.physics.rungs), name
 
 
 def test_a_law_without_loss_refuses_a_useless_q():

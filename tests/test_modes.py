@@ -76,7 +76,8 @@ def test_law_domain_gives_zero_likelihood_outside(paper_inputs):
     model = build_model("hertz", rung="backbone")
     params = {"young": 200e9, "delta0_scatter": 0.1, "offset_down": -0.005,
               "sigma_shift": 0.01, "kappa_shift": 0.1, "tau_shift": 1e-3, "mu_logq": 4.0,
-              "tau_logq": 0.4}
+              "tau_logq": 0.4, "loss_exponent": 1.0, "sigma_amp": 0.02, "tau_amp": 0.01,
+              "offset_amp_down": 0.0}
     inside, _ = log_density(model, (paper_inputs,), {}, params)
     assert np.isfinite(float(inside))
     far = dict(paper_inputs)

@@ -122,7 +122,9 @@ def test_folded_model_has_the_exact_log_density(folded, inputs):
     for za, zb in z:
         params = {"young": 2e11, "gamma": float(np.exp(za)), "lam": float(np.exp(zb)),
                   "delta0_scatter": 0.1, "sigma_shift": fold.sigma_ref,
-                  "offset_down": fold.offset_ref, "mu_logq": np.log(50.0), "tau_logq": 0.5}
+                  "offset_down": fold.offset_ref, "mu_logq": np.log(50.0), "tau_logq": 0.5,
+                  "loss_exponent": 1.0, "sigma_amp": 0.02, "tau_amp": 0.01,
+                  "offset_amp_down": 0.0}
         params = get_law(LAW).sampler_values(params)
         a, b = (float(d(params)) for d in dens)
         assert np.isfinite(a) == np.isfinite(b)

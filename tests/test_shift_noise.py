@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 from beadrod.inference.model.shift_noise import (
-    ProtocolShift,
+    ProtocolNormal,
     joint_log_density,
     loo_conditional,
     noise_variance,
@@ -59,10 +59,10 @@ def test_loo_conditional_is_gaussian_conditioning(case, tau):
 
 def test_pointwise_log_prob_is_the_conditional_and_default_the_joint(case):
     y, pred, var = case
-    d = ProtocolShift(jnp.asarray(pred), jnp.asarray(var), 2e-3, jnp.asarray(PROTO), P)
+    d = ProtocolNormal(jnp.asarray(pred), jnp.asarray(var), 2e-3, jnp.asarray(PROTO), P)
     assert float(jnp.sum(d.log_prob(jnp.asarray(y)))) == pytest.approx(
         stats.multivariate_normal(pred, _cov(var, 2e-3, PROTO)).logpdf(y), rel=1e-12)
-    pw = ProtocolShift(jnp.asarray(pred), jnp.asarray(var), 2e-3, jnp.asarray(PROTO), P,
+    pw = ProtocolNormal(jnp.asarray(pred), jnp.asarray(var), 2e-3, jnp.asarray(PROTO), P,
                        pointwise=True)
     m, v = loo_conditional(jnp.asarray(y - pred), jnp.asarray(var), 2e-3,
                            jnp.asarray(PROTO), P)
@@ -73,7 +73,7 @@ def test_pointwise_log_prob_is_the_conditional_and_default_the_joint(case):
 def test_joint_draws_have_the_covariance(case):
     _, pred, var = case
     tau = 5e-3
-    d = ProtocolShift(jnp.asarray(pred), jnp.asarray(var), tau, jnp.asarray(PROTO), P)
+    d = ProtocolNormal(jnp.asarray(pred), jnp.asarray(var), tau, jnp.asarray(PROTO), P)
     draws = np.asarray(d.sample(jax.random.PRNGKey(0), (200_000,)))
     assert np.all(np.abs(draws.mean(axis=0) - pred) < 5 * np.sqrt(var + tau**2) / 447)
     emp = np.cov(draws, rowvar=False)

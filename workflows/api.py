@@ -54,7 +54,7 @@ KEYWORDS: dict[str, str] = {
     "live_points": "evidence.live_points", "smc_particles": "evidence.smc_particles",
     "smc_seeds": "evidence.smc_seeds", "robust": "likelihood.robust",
     "two_percent_rule": "likelihood.two_percent_rule", "workers": "workers",
-    "law_files": "law_files", "quiet": "quiet",
+    "law_files": "law_files", "quiet": "quiet", "observables": "likelihood.observables",
 }
 """Keyword of :func:`compare` and :func:`fit` -> the configuration key it sets (the same
 key as the command's flag of that name; ``two_percent_rule=False`` is
@@ -244,7 +244,7 @@ def compare(data: Dataset | str | os.PathLike[str] | None = None,
             smc_seeds: int | None = None, robust: bool | None = None,
             two_percent_rule: bool | None = None, workers: int | None = None,
             law_files: Sequence[str | os.PathLike[str]] | None = None,
-            quiet: bool | None = None,
+            quiet: bool | None = None, observables: str | None = None,
             config: str | os.PathLike[str] | dict[str, Any] | None = None
             ) -> ComparisonResult:
     """Fit each law, check its sampling, compute LOO and the evidence, and compare them:
@@ -283,7 +283,7 @@ def compare(data: Dataset | str | os.PathLike[str] | None = None,
                 "extensions": extensions, "live_points": live_points,
                 "smc_particles": smc_particles, "smc_seeds": smc_seeds, "robust": robust,
                 "two_percent_rule": two_percent_rule, "workers": workers,
-                "law_files": law_files, "quiet": quiet}
+                "law_files": law_files, "quiet": quiet, "observables": observables}
     cfg = _resolve(config, keywords)
     _entry(cfg["sampling"]["chains"])
     dataset = None

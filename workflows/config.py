@@ -26,6 +26,7 @@ __all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFER
 # the fit rungs, from the one list of rungs (models.rungs imports no JAX, so the CLI builds
 # its parsers without starting it)
 RUNGS = FIT_RUNGS
+OBSERVABLES = ("all", "shift+q", "shift")
 SHIFT_NOISES = ("protocol", "constant")  # inference.model.shift_noise.SHIFT_NOISES
 # data.process.process(shift_reference=...): the reference sweep each shift is taken against
 SHIFT_REFERENCES = ("first", "preceding")
@@ -70,6 +71,7 @@ DEFAULTS: dict[str, Any] = {
         "two_percent_rule": True,
         "shift_reference": "first",  # first | preceding reference sweep
         "shift_noise": "protocol",  # protocol | constant (inference.model.shift_noise)
+        "observables": "all",  # all | shift+q | shift (what the evidence reads besides f0)
     },
     # paper_rung: also run the tension under the paper's Eq. 25 (3 extra NUTS fits)
     "tension": {"enabled": True, "paper_rung": True},
@@ -112,6 +114,9 @@ DESCRIPTIONS: dict[str, str] = {
                                    "drifted by more than 2 % (the paper's rule)",
     "likelihood.shift_reference": "reference of each Delta f/f0: " + " | ".join(
         SHIFT_REFERENCES) + " reference sweep of the protocol",
+    "likelihood.observables": "what the likelihood reads besides f0: all (shift, reference Q "
+                              "and the amplitude per volt of each drive sweep) | shift+q | "
+                              "shift (--observables)",
     "likelihood.shift_noise": "noise of the shifts: protocol (a floor, a part growing with "
                               "the shift, an offset shared by a protocol's sweeps) | "
                               "constant (one sd for all)",
@@ -298,6 +303,7 @@ def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None
     _choice(cfg["likelihood"]["shift_reference"], "likelihood.shift_reference",
             SHIFT_REFERENCES)
     _choice(cfg["likelihood"]["shift_noise"], "likelihood.shift_noise", SHIFT_NOISES)
+    _choice(cfg["likelihood"]["observables"], "likelihood.observables", OBSERVABLES)
     methods = cfg["evidence"]["methods"]
     if not isinstance(methods, list) or not methods:
         raise ConfigError("evidence.methods must list at least one of "

@@ -8,7 +8,8 @@ of the resonance curve at amplitude x by 7-harmonic balance, its drive E and fre
 ratio Omega; the apparent loss E Omega^2/x (what the peak amplitude per volt measures
 under base excitation) against the single-harmonic predictions.
 ``noise``: the law-free baseline on paper_like and Hertz on hertz_dynamics, each under
-the constant and the protocol noise model (2 chains x 300 + 300, one process).
+the constant and the protocol noise model, the likelihood reading the shift, f0 and Q
+(2 chains x 300 + 300, one process).
 """
 
 from __future__ import annotations
@@ -53,7 +54,8 @@ def noise() -> None:
         for kind in ("constant", "protocol"):
             res = beadrod.compare(ds, laws=[law], chains=2, warmup=300, samples=300,
                                   workers=1, quiet=True,
-                                  config={"likelihood": {"shift_noise": kind}})
+                                  config={"likelihood": {"shift_noise": kind,
+                                                         "observables": "shift+q"}})
             idata = res.idata[law]
             post = idata.posterior
             pit = loo_pit_summary(idata)

@@ -191,19 +191,45 @@ def posterior_draws(model: Callable, model_kwargs: dict, posterior: Mapping[str,
 
 
 def _iterate(l1: np.ndarray, l2: np.ndarray, *, tol: float = 1e-10,
-             max_iter: int = 10_000) -> tuple[float, int]:
+             max_iter: int = 1000) -> tuple[float, int]:
     # plain NumPy: a few thousand numbers, iterated on the host
     n1, n2 = l1.size, l2.size
     ls1, ls2 = np.log(n1 / (n1 + n2)), np.log(n2 / (n1 + n2))
-    log_r = float(np.median(l1))
-    for k in range(max_iter):
+
+    def step(log_r: float) -> float:
         num = logsumexp(l2 - np.logaddexp(ls1 + l2, ls2 + log_r)) - np.log(n2)
         den = logsumexp(-np.logaddexp(ls1 + l1, ls2 + log_r)) - np.log(n1)
-        new = float(num - den)
+        return float(num - den)
+
+    log_r = float(np.median(l1))
+    for k in range(max_iter):
+        new = step(log_r)
         if abs(new - log_r) < tol:
             return new, k + 1
         log_r = new
-    raise RuntimeError(f"bridge sampling did not converge in {max_iter} iterations")
+    # the fixed point creeps where proposal and posterior barely overlap (few draws in
+    # many dimensions); the same equation, r B(r) = A(r), has one root, and
+    # step(t) - t = ln A - ln(r B) is strictly decreasing in t = ln r (A falls with r,
+    # r B rises): bracket it and bisect
+    from scipy.optimize import brentq
+
+    def phi(t: float) -> float:
+        return step(t) - t
+
+    lo = hi = float(np.median(l1))
+    width = 1.0
+    while phi(lo) < 0 and width < 1e4:
+        lo -= width
+        width *= 2
+    width = 1.0
+    while phi(hi) > 0 and width < 1e4:
+        hi += width
+        width *= 2
+    if not (phi(lo) >= 0 >= phi(hi)):
+        raise RuntimeError("bridge sampling: no root of the bridge equation within "
+                           f"1e4 nats of the draws' median log weight ({max_iter} "
+                           "fixed-point iterations did not converge)")
+    return float(brentq(phi, lo, hi, xtol=tol, rtol=1e-15)), max_iter
 
 
 def _relative_error(l1: np.ndarray, l2: np.ndarray, log_r: float,

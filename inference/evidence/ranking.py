@@ -24,7 +24,7 @@ import pandas as pd
 from beadrod.inference.evidence.log_z import EvidenceResult, combined_agreement
 
 __all__ = ["DataHashMismatch", "loo_table", "evidence_table", "log_bayes_factor",
-           "rank_evidence", "loo_pit_summary", "LOO_PIT_P_MIN"]
+           "rank_evidence", "loo_pit_summary", "loo_pit_values", "LOO_PIT_P_MIN"]
 
 LOO_PIT_P_MIN = 0.01
 """Kolmogorov-Smirnov p-value below which LOO-PIT values count as non-uniform."""
@@ -164,44 +164,54 @@ def rank_evidence(entries: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _protocol_shift_pit(idata: az.InferenceData) -> np.ndarray:
-    # the shifts of a protocol share an offset: their leave-one-out predictive is the
-    # conditional Normal given the protocol's other sweeps, not the posterior predictive
-    # draws (which az.loo_pit would read)
+_PROTOCOL_SITES = {
+    # observed site: (its noise-free prediction, floor sd, growth, shared sd, dimension)
+    "shift_obs": ("shift_pred", "sigma_shift", "kappa_shift", "tau_shift", "sweep"),
+    "amp_obs": ("amp_pred", "sigma_amp", None, "tau_amp", "amp_sweep"),
+}
+
+
+def loo_pit_values(idata: az.InferenceData, var_name: str = "shift_obs") -> np.ndarray:
+    """LOO-PIT values of ``var_name``. Where its observations share a protocol offset
+    (the shifts under the protocol noise model, the amplitude ratios), each value is the
+    conditional Normal's given the protocol's other observations
+    (:func:`inference.model.shift_noise.loo_pit`): the posterior predictive draws, which
+    ``az.loo_pit`` reads, are the joint ones and would count the shared offset twice."""
     from beadrod.inference.model.shift_noise import loo_pit
 
     post = idata.posterior
+    spec = _PROTOCOL_SITES.get(var_name)
+    if spec is None or spec[3] not in post:
+        return np.asarray(az.loo_pit(idata, y=var_name), float).ravel()
+    pred_name, sigma, kappa, tau, dim = spec
     flat = post.stack(sample=("chain", "draw"))
     # only the grouping matters: protocols in order of first appearance
-    ids, proto = np.unique(np.asarray(post["sweep_protocol"]), return_inverse=True)
-    ll = idata.log_likelihood["shift_obs"].stack(sample=("chain", "draw"))
-    return loo_pit(np.asarray(idata.observed_data["shift_obs"]),
-                   np.asarray(flat["shift_pred"].transpose("sample", "sweep")),
-                   *(np.asarray(flat[k]) for k in ("sigma_shift", "kappa_shift",
-                                                    "tau_shift")),
-                   proto, len(ids), np.asarray(ll.transpose("sample", "sweep")))
+    _, proto = np.unique(np.asarray(post[f"{dim}_protocol"]), return_inverse=True)
+    ll = idata.log_likelihood[var_name].stack(sample=("chain", "draw"))
+    scale = np.asarray(flat[sigma])
+    growth = np.asarray(flat[kappa]) if kappa else np.zeros_like(scale)
+    return loo_pit(np.asarray(idata.observed_data[var_name]),
+                   np.asarray(flat[pred_name].transpose("sample", dim)), scale, growth,
+                   np.asarray(flat[tau]), proto, int(proto.max()) + 1,
+                   np.asarray(ll.transpose("sample", dim)))
 
 
 def loo_pit_summary(idata: az.InferenceData, var_name: str = "shift_obs") -> dict[str, Any]:
     """Calibration of the leave-one-out predictive of ``var_name`` (LOO-PIT).
 
     PIT_i = P(y_rep,i <= y_i | y_-i), uniform on [0, 1] for a calibrated model
-    (Gelfand et al. 1992; Gabry et al. 2019). Under the shifts' ``protocol`` noise model
-    the sweeps of a protocol are not independent, and PIT_i is the conditional Normal's
-    (:func:`inference.model.shift_noise.loo_pit`). Returned: the Kolmogorov-Smirnov distance
-    ``ks_d`` to the uniform and its p-value ``ks_p`` (``calibrated``: p >= LOO_PIT_P_MIN);
-    ``tails``, the share of PIT values below 0.05 or above 0.95 (0.10 if calibrated;
-    more: the predictive is too narrow, fewer: too wide); ``mean`` (0.5 if calibrated;
-    above: the data lie above the predictions); ``n`` values.
+    (Gelfand et al. 1992; Gabry et al. 2019), from :func:`loo_pit_values`. Returned: the
+    Kolmogorov-Smirnov distance ``ks_d`` to the uniform and its p-value ``ks_p``
+    (``calibrated``: p >= LOO_PIT_P_MIN); ``tails``, the share of PIT values below 0.05
+    or above 0.95 (0.10 if calibrated; more: the predictive is too narrow, fewer: too
+    wide); ``mean`` (0.5 if calibrated; above: the data lie above the predictions); ``n``
+    values.
     """
     from scipy import stats
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if var_name == "shift_obs" and "tau_shift" in idata.posterior:
-            pit = _protocol_shift_pit(idata)
-        else:
-            pit = np.asarray(az.loo_pit(idata, y=var_name), float).ravel()
+        pit = loo_pit_values(idata, var_name)
     pit = pit[np.isfinite(pit)]
     if pit.size == 0:
         raise ValueError(f"no finite LOO-PIT values for {var_name!r}")

@@ -17,9 +17,10 @@ import jax.numpy as jnp
 import numpyro
 import numpyro.distributions as dist
 
+from beadrod.inference.model.amplitude import has_amplitudes, observe_amplitude
 from beadrod.inference.model.likelihood import observe_logq, observe_shift
 from beadrod.inference.model.priors import prior
-from beadrod.inference.model.shift_noise import ProtocolShift, noise_variance
+from beadrod.inference.model.shift_noise import ProtocolNormal, noise_variance
 from beadrod.inference.speed.residual_fold import POINTWISE
 from beadrod.inference.speed.residual_fold import log_likelihood as residual_log_likelihood
 from beadrod.models.scene import materials
@@ -68,7 +69,7 @@ def observe_drive(spec: Any, curve: jnp.ndarray, data: dict,
         if spec.likelihood == "normal":
             tau = numpyro.sample("tau_shift", prior("tau_shift", spec.overrides))
             with numpyro.plate("sweeps", pred.shape[0]):
-                numpyro.sample("shift_obs", ProtocolShift(
+                numpyro.sample("shift_obs", ProtocolNormal(
                     pred, var, tau, data["proto"], data["n_protocols"],
                     pointwise=bool(data.get(POINTWISE))), obs=data["shift"])
             return
@@ -82,6 +83,25 @@ def observe_drive(spec: Any, curve: jnp.ndarray, data: dict,
     d = jnp.asarray(data["direction"], float)
     numpyro.factor("shift_obs_folded", residual_log_likelihood(
         sums, offset, sigma, int(d.shape[0]), jnp.sum(d * d)))
+
+
+def _scale(amplitude, f0):
+    return amplitude * jnp.square(2.0 * jnp.pi * jnp.abs(f0)) / materials.G_STANDARD
+
+
+def _baseline_amplitude(spec: Any, curve: jnp.ndarray, xs_ref: jnp.ndarray, f0: jnp.ndarray,
+                        data: dict) -> None:
+    """Law-free amplitude ratios: ln L(x) - ln L0 = beta ln Omega + g (xs/xs_ref)^p
+    (inference.model.amplitude), the pivot the shift's."""
+    beta = numpyro.sample("loss_exponent", prior("loss_exponent", spec.overrides))
+    gain = numpyro.sample("loss_gain", prior("loss_gain", spec.overrides))
+    power = numpyro.sample("loss_power", prior("loss_power", spec.overrides))
+    idx, p_i = data["amp_idx"], data["amp_proto"]
+    omega = jnp.maximum(1.0 + curve[idx], 1e-3)
+    rel = gain * jnp.power(_scale(data["amplitude"][idx], f0[p_i]) / xs_ref, power)
+    rel_ref = gain * jnp.power(_scale(data["ref_amplitude"], f0) / xs_ref, power)[p_i]
+    ratio = (2.0 - beta) * jnp.log(omega) - rel + rel_ref
+    observe_amplitude(spec, ratio, data)
 
 
 PIVOT_POWER = 2.0
@@ -122,6 +142,9 @@ def baseline_model(spec: Any, data: dict) -> None:
         # pivot moves with the draw, and a_ref keeps its meaning: the shift at xs_ref
         xs_ref = reference_scale(data["amplitude"], f0_sweep)
         amp = numpyro.deterministic("amp", a_ref * jnp.power(xs_ref, -power))
-        observe_drive(spec, baseline_curve(amp, power, data["amplitude"], f0_sweep), data)
+        curve = baseline_curve(amp, power, data["amplitude"], f0_sweep)
+        observe_drive(spec, curve, data)
+        if spec.use_amplitude and has_amplitudes(data):
+            _baseline_amplitude(spec, curve, xs_ref, f0, data)
     if spec.use_q:
         nuisance_q(spec, data)

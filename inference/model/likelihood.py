@@ -1,8 +1,9 @@
 """Observation models shared by the contact-law models, and the data they consume.
 
 ``model_inputs(ds)`` turns a ProcessedDataset (or any object with the same fields)
-into the dict of arrays every model takes; observations live under ``f0``, ``shift``
-and ``q_obs`` and are set to None by :func:`without_observations` for prior predictive
+into the dict of arrays every model takes; observations live under ``f0``, ``shift``,
+``q_obs`` and (where the dataset has amplitude ratios, :mod:`inference.model.amplitude`)
+``amp_obs``, and are set to None by :func:`without_observations` for prior predictive
 simulation. Q is observed only where the protocol has one (NaN rows are dropped
 here, once, so shapes stay static under jit); with no Q at all there is no Q site.
 """
@@ -16,14 +17,16 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
+from beadrod.inference.model.amplitude import amplitude_inputs
 from beadrod.models.registry import get_law, law_names
 
 __all__ = ["model_inputs", "without_observations", "observe_shift", "observe_logq",
            "design_inputs", "simulate", "scene_quantities", "sweep_layout", "SWEEP_LAYOUT_KEYS",
            "OBSERVED_SITES", "OBSERVED_DATA_KEYS"]
 
-OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs")
-OBSERVED_DATA_KEYS = {"f0_obs": "f0", "shift_obs": "shift", "q_obs": "q_obs"}
+OBSERVED_SITES = ("f0_obs", "shift_obs", "q_obs", "amp_obs")
+OBSERVED_DATA_KEYS = {"f0_obs": "f0", "shift_obs": "shift", "q_obs": "q_obs",
+                      "amp_obs": "amp_obs"}
 """The model input that holds each observation site's values."""
 
 
@@ -61,7 +64,14 @@ def model_inputs(ds: Any) -> dict[str, Any]:
         "nu_rod": float(sc.rod_material.poisson),
         "scene": scene_quantities(sc),
         **_jnp_layout(ds.drive_protocol, f0.size),
+        **(amplitude_inputs(ds) if _has_amplitude_data(ds) else {}),
     }
+
+
+def _has_amplitude_data(ds: Any) -> bool:
+    # a dataset object without the reference amplitudes (built by hand) has no ratios
+    return all(getattr(ds, k, None) is not None
+               for k in ("drive_voltage", "ref_amplitude", "ref_voltage"))
 
 
 SWEEP_LAYOUT_KEYS = ("sweep_grid", "sweep_valid", "sweep_position")
@@ -117,8 +127,9 @@ def without_observations(inputs: dict[str, Any]) -> dict[str, Any]:
     out = dict(inputs)
     if inputs.get("f0") is not None:
         out["n_protocols"] = int(inputs["f0"].shape[0])
-    for k in ("f0", "shift", "q_obs"):
-        out[k] = None
+    for k in ("f0", "shift", "q_obs", "amp_obs"):
+        if k in inputs or k != "amp_obs":
+            out[k] = None
     return out
 
 
@@ -213,5 +224,7 @@ def simulate(model: Any, design: dict[str, Any], truth: dict[str, Any],
         out["shift"] = tr["shift_obs"]["value"]
     if "q_obs" in tr:
         out["q_obs"] = tr["q_obs"]["value"]
+    if "amp_obs" in tr:
+        out["amp_obs"] = tr["amp_obs"]["value"]
     values = {k: s["value"] for k, s in tr.items() if s["type"] in ("sample", "deterministic")}
     return out, values

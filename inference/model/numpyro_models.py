@@ -87,6 +87,7 @@ import numpy as np
 import numpyro
 import numpyro.distributions as dist
 
+from beadrod.inference.model.amplitude import has_amplitudes, observe_amplitude, predicted_ratio
 from beadrod.inference.model.baseline import (
     baseline_curve,
     baseline_model,
@@ -140,6 +141,7 @@ class ModelSpec:
     use_shift: bool = True
     use_q: bool = True
     use_f0: bool = True
+    use_amplitude: bool = True
     likelihood: str = "normal"
     student_df: float = 4.0
     shift_noise: str = DEFAULT_SHIFT_NOISE
@@ -185,6 +187,8 @@ class ModelSpec:
             parts.append("no-q")
         if not self.use_f0:
             parts.append("no-f0")
+        if not self.use_amplitude:
+            parts.append("no-amplitude")
         return "/".join(parts)
 
 
@@ -269,14 +273,41 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
             numpyro.factor("law_domain", jnp.where(inside, 0.0, -jnp.inf))
         observe_drive(spec, curve, data, None if residual is None
                       else sums(residual, theta, steps.residual_sums))
-    if spec.use_q:
+    q_pred = None
+    if spec.use_q or (spec.use_amplitude and law.predicts_q):
         if law.predicts_q:
-            sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))
             q_pred = numpyro.deterministic("q_pred", law.quality_factor(omega0=omega0, **kw))
+    if spec.use_q:
+        if q_pred is not None:
+            sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))
             observe_logq(jnp.log(q_pred[data["q_idx"]]), sigma, data["q_obs"],
                          likelihood=spec.likelihood, df=spec.student_df)
         else:
             nuisance_q(spec, data)
+    if spec.use_shift and spec.use_amplitude and has_amplitudes(data):
+        _law_amplitude(spec, law, kw, curve, delta0, q_pred, data)
+
+
+def _law_amplitude(spec: ModelSpec, law: Any, kw: dict, curve: jnp.ndarray,
+                   delta0: jnp.ndarray, q_pred: jnp.ndarray | None, data: dict) -> None:
+    """The amplitude ratios under the law's loss (inference.model.amplitude): its own
+    linear loss 1/Q where it predicts Q, else the measured one; its own loss exponent, else
+    the fitted background's."""
+    idx, p_i = data["amp_idx"], data["amp_proto"]
+    beta = (law.physics.loss_exponent if law.has_own_loss
+            else numpyro.sample("loss_exponent", prior("loss_exponent", spec.overrides)))
+    linear = 1.0 / (q_pred if q_pred is not None else data["q_plugin"])
+    x = data["amplitude"][idx] / delta0[p_i]
+    # the resonance ratio at the sweep's amplitude: the up-sweep curve (a bound keeps the
+    # log finite at parameter points far outside what any data allow)
+    omega = jnp.maximum(1.0 + curve[idx], 1e-3)
+    loss = law.loss(x, linear_loss=linear[p_i], omega_ratio=omega,
+                    background_exponent=beta, **kw)
+    x_ref = data["ref_amplitude"] / delta0
+    loss_ref = law.loss(x_ref, linear_loss=linear, omega_ratio=1.0,
+                        background_exponent=beta, **kw)[p_i]
+    observe_amplitude(spec, predicted_ratio(omega_ratio=omega, loss=loss, loss_ref=loss_ref),
+                      data)
 
 
 def _probe(spec: ModelSpec, data_scene: dict | None) -> None:

@@ -53,7 +53,7 @@ from jax.scipy.special import ndtr
 from numpyro.distributions import constraints
 
 __all__ = ["SHIFT_NOISES", "DEFAULT_SHIFT_NOISE", "noise_variance", "protocol_sums",
-           "joint_log_density", "loo_conditional", "ProtocolShift", "loo_pit"]
+           "joint_log_density", "loo_conditional", "ProtocolNormal", "loo_pit"]
 
 SHIFT_NOISES = ("protocol", "constant")
 """The shift's noise models: ``protocol`` (floor, growth, protocol offset), ``constant``."""
@@ -99,8 +99,9 @@ def loo_conditional(resid: Any, var: Any, tau: Any, proto: Any,
     return t2 * (s - resid / var) / denom, var + t2 / denom
 
 
-class ProtocolShift(dist.Distribution):
-    """The measured shifts of all sweeps under the ``protocol`` noise model.
+class ProtocolNormal(dist.Distribution):
+    """Observations whose protocols each share one Normal offset: the measured shifts under
+    the ``protocol`` noise model, and the amplitude ratios (inference.model.amplitude).
 
     ``sample`` draws them jointly (one offset per protocol). ``log_prob`` returns the
     joint log density spread over the sweeps (:func:`joint_log_density`), or with

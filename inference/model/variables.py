@@ -56,6 +56,18 @@ VARIABLES: dict[str, VariableInfo] = {
                                    "protocol share through its first reference"),
     "offset_down": VariableInfo("1", "extra shift of down sweeps (delayed jump of a "
                                      "softening resonance)"),
+    # amplitude ratios (inference.model.amplitude)
+    "amp_obs": VariableInfo("1", "ln of the resonance amplitude per volt of each drive sweep "
+                                 "over its protocol's first reference"),
+    "amp_pred": VariableInfo("1", "noise-free amp_obs: 2 ln Omega - ln L(x) + ln L(x_ref), "
+                                  "down-sweep offset included"),
+    "sigma_amp": VariableInfo("1", "relative error of a sweep's resonance amplitude"),
+    "tau_amp": VariableInfo("1", "relative error of a protocol's reference amplitude, "
+                                 "shared by its ratios"),
+    "offset_amp_down": VariableInfo("1", "ln amplitude of down sweeps against up sweeps"),
+    "loss_exponent": VariableInfo("1", "exponent beta of the background loss, L0 Omega^beta"),
+    "loss_gain": VariableInfo("1", "baseline: change of ln L at the pivot amplitude"),
+    "loss_power": VariableInfo("1", "baseline: exponent of the loss change in xs"),
     # quality factor
     "q_pred": VariableInfo("1", "linear quality factor Q the viscoelastic law predicts per "
                                 "protocol"),
@@ -98,4 +110,6 @@ SITE_DIMS: dict[str, list[str]] = {
     "q_obs": ["protocol_q"],
     "shift_pred": ["sweep"],
     "shift_obs": ["sweep"],
+    "amp_obs": ["amp_sweep"],
+    "amp_pred": ["amp_sweep"],
 }

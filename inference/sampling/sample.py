@@ -335,11 +335,14 @@ def run_nuts(
         coords=all_coords, dims=all_dims,
         **{g: v for g, v in groups.items() if v})
     extra = _sweep_coords(data, all_coords["protocol"])
+    amp_extra = ({"amp_sweep_protocol": ("amp_sweep", all_coords["protocol"][
+        np.asarray(data["amp_proto"], int)])} if "amp_proto" in data else {})
     for group in idata.groups():
         ds = idata[group]
-        if "sweep" in ds.dims:
-            for name, coord in extra.items():  # in place: the group keeps its identity
-                ds.coords[name] = coord
+        for dim, coords in (("sweep", extra), ("amp_sweep", amp_extra)):
+            if dim in ds.dims:
+                for name, coord in coords.items():  # in place: the group keeps its identity
+                    ds.coords[name] = coord
     describe(idata)
     timings = {"nuts_s": t2 - t0, "predictive_s": t3 - t2}
     if extensions:

@@ -10,6 +10,7 @@ from beadrod.models.laws import (
     dmt,
     greenwood_williamson,
     hertz,
+    hertz_hysteretic,
     jkr,
     maugis_dugdale,
     powerlaw,
@@ -18,6 +19,7 @@ from beadrod.models.laws import (
 
 __all__ = ["BUILTIN"]
 
-BUILTIN = (hertz.LAW, powerlaw.LAW, viscoelastic.LAW, viscoelastic.SPLIT_LAW, jkr.LAW, dmt.LAW,
-           greenwood_williamson.LAW, maugis_dugdale.LAW)
+BUILTIN = (hertz.LAW, powerlaw.LAW, viscoelastic.LAW, viscoelastic.SPLIT_LAW,
+           hertz_hysteretic.LAW, jkr.LAW, dmt.LAW, greenwood_williamson.LAW,
+           maugis_dugdale.LAW)
 """The built-in laws, in the order every table and figure shows them."""

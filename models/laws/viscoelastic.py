@@ -274,6 +274,9 @@ def _law(split: bool):
             domains={"backbone": lambda x, **_: within_amplitude(x)},
             linear_q=lambda *, omega0, **kw: linear_q(damping_constant=a(kw, e_q),
                                                       omega0=omega0),
+            # q = A omega k_eq(U) (the first harmonic of A dF/dt) and k_eq = m omega^2 on
+            # the backbone: L = A omega0 Omega^3 (docs/damping.md)
+            loss_exponent=3.0,
         ),
         presentation=Presentation(
             label="viscoelastic (split η)" if split else "viscoelastic",

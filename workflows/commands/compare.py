@@ -31,6 +31,7 @@ FLAG_KEYS: dict[str, str] = {
     "live_points": "evidence.live_points", "smc_particles": "evidence.smc_particles",
     "smc_seeds": "evidence.smc_seeds", "evidence": "evidence.methods",
     "robust": "likelihood.robust", "no_two_percent_rule": "likelihood.two_percent_rule",
+    "observables": "likelihood.observables",
     "law_files": "law_files",
 }
 
@@ -219,6 +220,10 @@ def _common(p: argparse.ArgumentParser) -> None:
                    f"{','.join(ev['methods'])}; add ,ns for the nested-sampling cross-check: "
                    "~3 min more on 2 cores)")
     p.add_argument("--robust", action="store_true", help="Student-t likelihood for the shift")
+    p.add_argument("--observables", choices=("all", "shift+q", "shift"),
+                   help="what the likelihood reads besides f0: all (default: the shift, the "
+                        "reference Q and each drive sweep's amplitude per volt), shift+q, "
+                        "or shift alone")
     p.add_argument("--no-two-percent-rule", action="store_true",
                    help="keep drive steps after the linear resonance drifted by > 2 %%")
     p.add_argument("--force", action="store_true", help="overwrite a non-empty output folder "

@@ -307,7 +307,7 @@ def fig_loo_pit(idata, y: str | Sequence[str] | None = None) -> Figure:
     excursion a bias. Needs the observed_data, posterior_predictive and log_likelihood
     groups.
     """
-    import arviz as az
+    from beadrod.inference.evidence.ranking import loo_pit_values
 
     for group in ("observed_data", "posterior_predictive", "log_likelihood"):
         if not hasattr(idata, group):
@@ -327,7 +327,7 @@ def fig_loo_pit(idata, y: str | Sequence[str] | None = None) -> Figure:
         with warnings.catch_warnings():
             # Small test posteriors trip the Pareto-k warning; k is reported elsewhere.
             warnings.simplefilter("ignore", UserWarning)
-            pit = np.asarray(az.loo_pit(idata, y=name), dtype=float).ravel()
+            pit = loo_pit_values(idata, name)
         pit = pit[np.isfinite(pit)]
         n = max(pit.size, 1)
         ecdf = np.searchsorted(np.sort(pit), u, side="right") / n

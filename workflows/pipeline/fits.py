@@ -40,6 +40,8 @@ def beadrod_version() -> str:
 # (models.law.Param) and the baseline's are dimensionless but for mu_f0/tau_f0.
 NUISANCE_UNITS = {
     "delta0_scatter": "-", "sigma_shift": "-", "kappa_shift": "-", "tau_shift": "-",
+    "sigma_amp": "-", "tau_amp": "-", "offset_amp_down": "-", "loss_exponent": "-",
+    "loss_gain": "-", "loss_power": "-",
     "offset_down": "-", "sigma_logq": "-",
     "amp": "-", "a_ref": "-", "power": "-", "mu_f0": "Hz", "tau_f0": "Hz", "mu_logq": "-",
     "tau_logq": "-",
@@ -95,7 +97,8 @@ def __getattr__(name: str) -> Any:
 
 
 def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
-                     use_q: bool = True, shift_noise: str = "protocol") -> dict[str, Any]:
+                     use_q: bool = True, use_amplitude: bool = True,
+                     shift_noise: str = "protocol") -> dict[str, Any]:
     """ModelSpec per requested name, every law at the same ``rung`` (the baseline has no
     rung). A law that cannot run at ``rung`` is refused with a clear message, never
     swapped for another rung."""
@@ -126,8 +129,31 @@ def comparison_specs(names: list[str] | None, rung: str, likelihood: str, *,
         raise ValueError(f"law(s) {lacking} cannot be fitted at rung '{rung}' (their rungs: "
                          f"{have}); choose another --rung or leave them out with --laws")
     return {name: ModelSpec(law=name, rung=rung, likelihood=likelihood, use_q=use_q,
-                            shift_noise=shift_noise)
+                            use_amplitude=use_amplitude, shift_noise=shift_noise)
             for name in names}
+
+
+def _unreliable_bridge(estimates: dict[str, Any]) -> str:
+    """Why the bridge estimate is not to be trusted ('' where it is, or absent)."""
+    est = estimates.get("bridge")
+    if est is None or est.settings.get("reliable", True):
+        return ""
+    return str(est.settings.get("reason") or "unreliable")
+
+
+def observed(spec: Any, inputs: dict[str, Any]) -> list[str]:
+    """What a fit's likelihood read: f0, and the shift, reference Q and amplitude ratios
+    where its spec uses them and the data have them."""
+    from beadrod.inference.model.amplitude import has_amplitudes
+
+    out = ["f0"] if spec.use_f0 else []
+    if spec.use_shift:
+        out.append("shift")
+    if spec.use_q and int(np.shape(inputs.get("q_obs", ()))[0]) > 0:
+        out.append("Q")
+    if spec.use_shift and spec.use_amplitude and has_amplitudes(inputs):
+        out.append("amplitude")
+    return out
 
 
 def load_data(cfg: dict[str, Any]):
@@ -360,11 +386,25 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         estimates[method] = est
         done(log, job, "%s: log Z = %.2f +- %.2f (%s, %.0f s)", name, est.log_z,
              est.log_z_err, method, est.wall_s)
+    # a run that failed its gate is marked failed whatever its evidence: no fallback then
+    fallback = _unreliable_bridge(estimates) if verdict.passed else ""
+    if fallback and "ns" not in estimates:
+        # one Normal proposal cannot bridge two modes: nested sampling, which needs none
+        log.warning("%s: the bridge estimate is not reliable (%s): its evidence is taken "
+                    "by nested sampling instead", name, fallback)
+        begin(log, job, "%s: evidence by nested sampling (%d live points)", name,
+              ev_cfg["live_points"])
+        estimates["ns"] = nested_sampling_log_z(model, {"data": inputs},
+                                                num_live_points=ev_cfg["live_points"],
+                                                seed=cfg["seed"])
+        done(log, job, "%s: log Z = %.2f +- %.2f (ns, %.0f s)", name, estimates["ns"].log_z,
+             estimates["ns"].log_z_err, estimates["ns"].wall_s)
     for k, est in estimates.items():
         timings[f"evidence_{k}_s"] = est.wall_s
     timings["total_s"] = time.perf_counter() - t0
-    # the first listed estimator ranks; one that failed leaves log_z empty
-    first = estimates.get(ev_cfg["methods"][0])
+    # the first listed estimator ranks (nested sampling where the bridge is unreliable);
+    # one that failed leaves log_z empty
+    first = estimates.get("ns" if fallback else ev_cfg["methods"][0])
     second = next((estimates[m] for m in ev_cfg["methods"][1:2] if m in estimates), None)
     ests = list(estimates.values())
     agree = None
@@ -389,14 +429,19 @@ def fit_law(name: str, spec: Any, inputs: dict[str, Any], ds: Any, cfg: dict[str
         "log_z2_err": second.log_z_err if second else None,
         "log_z2_method": second.method if second else None,
         "evidence_agree": agree, "evidence": {k: e.to_dict() for k, e in estimates.items()},
+        "evidence_fallback": fallback or None,
+        "observables": observed(spec, inputs),
         "elpd_loo": loo["elpd_loo"], "elpd_loo_se": loo["se"],
         "pareto_k_bad": loo["k_bad"] + loo["k_very_bad"], "loo": loo,
         "timings": timings, "modes": modes, "data_hash": ds.data_hash, "cache_key": key,
     }
-    try:  # the report's calibration check, here where the fit ran (a worker process)
-        summary["loo_pit"] = loo_pit_summary(fit.idata, "shift_obs")
-    except Exception as exc:  # noqa: BLE001 (a degenerate tiny run: say so, go on)
-        summary["loo_pit"] = {"error": f"{type(exc).__name__}: {exc}"}
+    for key, site in (("loo_pit", "shift_obs"), ("loo_pit_amplitude", "amp_obs")):
+        if site not in fit.idata.observed_data:
+            continue
+        try:  # the report's calibration check, here where the fit ran (a worker process)
+            summary[key] = loo_pit_summary(fit.idata, site)
+        except Exception as exc:  # noqa: BLE001 (a degenerate tiny run: say so, go on)
+            summary[key] = {"error": f"{type(exc).__name__}: {exc}"}
     save_idata(fit.idata, idata_path)
     write_json(summary_path, summary)
 

@@ -119,10 +119,12 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
 
     shared, split = _pair(pair)
     noise = str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))
+    # the viscosity from Q alone and from the shift alone: the amplitude ratios stay out
     jobs = [Job("tension:eta_q", "eta", "eta_q",
                 {"law": shared, "rung": rung, "likelihood": lik, "use_shift": False,
-                 "shift_noise": noise}, cfg, seed_offset=12)]
-    shift_alone = {"law": shared, "likelihood": lik, "use_q": False, "shift_noise": noise}
+                 "shift_noise": noise, "use_amplitude": False}, cfg, seed_offset=12)]
+    shift_alone = {"law": shared, "likelihood": lik, "use_q": False, "shift_noise": noise,
+                   "use_amplitude": False}
     if rung in ETA_IN_SHIFT:
         jobs.append(Job(f"tension:eta_shift:{rung}", "eta", "eta_shift",
                         {"rung": rung, **shift_alone}, cfg, seed_offset=11))

@@ -53,9 +53,18 @@ def model_specs(cfg: dict[str, Any], names: list[str] | None,
     """ModelSpec per law of ``names`` under ``cfg``: its rung (or ``rung``), its noise
     model (likelihood.robust) and whether Q enters the likelihood (likelihood.use_q)."""
     lik = "student_t" if cfg["likelihood"]["robust"] else "normal"
-    return comparison_specs(names, rung or cfg["rung"], lik,
-                            use_q=bool(cfg["likelihood"]["use_q"]),
-                            shift_noise=shift_noise(cfg))
+    use_q, use_amplitude = observables(cfg)
+    return comparison_specs(names, rung or cfg["rung"], lik, use_q=use_q,
+                            use_amplitude=use_amplitude, shift_noise=shift_noise(cfg))
+
+
+def observables(cfg: dict[str, Any]) -> tuple[bool, bool]:
+    """(Q, amplitude): whether the reference Q and the amplitude ratios enter the
+    likelihood, from likelihood.observables (and likelihood.use_q, which can only take Q
+    out)."""
+    lik = cfg.get("likelihood", {})
+    which = str(lik.get("observables", "all"))
+    return (bool(lik.get("use_q", True)) and which != "shift", which == "all")
 
 
 def shift_noise(cfg: dict[str, Any]) -> str:
@@ -75,10 +84,15 @@ _DATA: dict[str, tuple[Any, dict[str, Any]]] = {}
 def _figure_data(run: LawRun, spec: Any, inputs: dict[str, Any], ds: Any) -> Any:
     # what the figures compute from this fit, here where the fit ran (a worker process:
     # its compilation overlaps the other fits); None leaves it to the figures
+    from beadrod.workflows.figures.damping import inv_q_panel
     from beadrod.workflows.figures.numbers import law_figure_data
 
     try:
-        return law_figure_data(run.name, spec, run.idata, inputs, ds)
+        out = law_figure_data(run.name, spec, run.idata, inputs, ds)
+        panel = inv_q_panel(run.name, run.name, run.idata, inputs, ds)
+        if panel is not None:
+            out["inv_q_panel"] = panel
+        return out
     except Exception as exc:  # noqa: BLE001 (the figures retry it and say why)
         log.warning("%s: figure data not computed with the fit (%s: %s)", run.name,
                     type(exc).__name__, exc)
@@ -268,12 +282,12 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
     jobs = [Job(name, "fit", name, spec, cfg, str(out)) for name, spec in specs.items()]
     pair = tension_pair(specs)  # (shared, split) law names, if both are compared
     has_q = int(inputs["q_obs"].shape[0]) > 0
-    do_tension = bool(cfg["tension"]["enabled"] and pair and cfg["likelihood"]["use_q"]
+    do_tension = bool(cfg["tension"]["enabled"] and pair and observables(cfg)[0]
                       and has_q)
     if cfg["tension"]["enabled"] and pair and not do_tension:
         log.info("tension analysis skipped: it sets eta from Q against eta from the shift, "
                  "and %s", "likelihood.use_q = false leaves Q out"
-                 if not cfg["likelihood"]["use_q"] else "no protocol of the data has a Q")
+                 if not observables(cfg)[0] else "no protocol of the data has a Q")
     if do_tension:
         jobs += outputs.tension_jobs(cfg, out, specs[pair[0]].rung, lik, pair)
     jobs.sort(key=job_order)

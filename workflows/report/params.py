@@ -87,6 +87,17 @@ PARAMETERS: dict[str, Param] = {
                                             "shift, as a fraction of it (bent peaks, wear)"),
     "tau_shift": Param("τ_shift", meaning="sd of the offset all shifts of a protocol share "
                                           "through its first reference sweep"),
+    "sigma_amp": Param("σ_amp", meaning="relative error of a drive sweep's resonance "
+                                        "amplitude"),
+    "tau_amp": Param("τ_amp", meaning="relative error of a protocol's reference amplitude, "
+                                      "shared by its amplitude ratios"),
+    "offset_amp_down": Param("o_amp", meaning="ln amplitude of down sweeps against up "
+                                              "sweeps"),
+    "loss_exponent": Param("β", meaning="exponent of the background loss L0 Ω^β (0: constant "
+                                        "loss factor, 1: dashpot, 3: radiation into the rod)"),
+    "loss_gain": Param("g_loss", meaning="baseline: change of ln L at the pivot amplitude"),
+    "loss_power": Param("p_loss", meaning="baseline: exponent of its loss change in the "
+                                          "amplitude scale"),
     "offset_down": Param("o_down", meaning="constant offset of Δf/f0 in down sweeps against "
                                            "up sweeps (the delayed jump of a softening "
                                            "resonance)"),

@@ -207,6 +207,7 @@ def _comparison_rows(result: Mapping) -> list[dict[str, Any]]:
             "pareto_k_bad": lw.get("pareto_k_bad", ""),
             "evidence_agree": "" if agree is None else bool(agree),
             "failures": "; ".join(map(str, lw.get("failures") or [])),
+            "observables": ", ".join(map(str, lw.get("observables") or [])),
         })
     return rows
 

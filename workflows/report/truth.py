@@ -42,6 +42,10 @@ _NOTES: dict[str, dict[str, str]] = {
         "kappa_shift": "no truth: " + _NO_SCATTER_MODEL,
         "tau_shift": "no truth: the first reference's 2 Hz noise and drift are shared by "
                      "the protocol's shifts, but not as one Gaussian offset",
+        "loss_exponent": "no truth: the world draws delta = Q d V, a force proportional to "
+                         "the voltage: under base excitation that is beta = 2",
+        "sigma_amp": "no truth: amplitudes carry 3 % log-normal noise (sigma_amp ~ 0.03)",
+        "tau_amp": "no truth: the reference amplitude carries the same 3 % noise",
         "offset_down": "no truth: down sweeps read s (1 + h x) with h = 0.15, a "
                        "multiplicative split, not a constant offset",
         "amp": "no truth: " + _BASELINE, "power": "no truth: " + _BASELINE,
@@ -61,6 +65,10 @@ _NOTES: dict[str, dict[str, str]] = {
                        "fit, not a set fraction of the shift",
         "tau_shift": "no truth: the first reference's error is shared by the protocol's "
                      "shifts, but it comes from a peak fit, not one Gaussian offset",
+        "loss_exponent": "no truth: the world's dashpot is stiffness-proportional (beta = 3 "
+                         "in one harmonic, less with its harmonics)",
+        "sigma_amp": "no truth: amplitudes are read by a peak fit from curves with 1 % noise",
+        "tau_amp": "no truth: the reference amplitude is read by the same peak fit",
         "offset_down": "no truth: up and down sweeps differ by the harmonic-balance "
                        "hysteresis, not by a set offset",
         "amp": "no truth: " + _BASELINE, "power": "no truth: " + _BASELINE,
