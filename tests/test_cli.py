@@ -110,6 +110,9 @@ def compare_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("compare")
     rc = main(["compare", "--out", str(out), "--force", "--laws", ",".join(LAWS), *TINY,
                "--evidence", "bridge",  # nested sampling is run by test_fit_one_law
+               # the amplitude ratios run end to end in tests/test_api.py and
+               # tests/test_plots.py; without them this run compiles a smaller model
+               "--observables", "shift+q",
                "--workers", "2"])  # worker processes (test_workers_same_numbers: in-process)
     assert rc == 0
     return out
@@ -168,7 +171,7 @@ def test_compare_refuses_to_overwrite_and_resumes(compare_run, capsys):
     assert "--force" in capsys.readouterr().err
     before = (out / "laws" / "viscoelastic.json").stat().st_mtime_ns
     assert main(["compare", "--out", str(out), "--resume", "--laws", "viscoelastic", *TINY,
-                 "--evidence", "bridge"]) == 0
+                 "--evidence", "bridge", "--observables", "shift+q"]) == 0
     # reused, not refitted
     assert (out / "laws" / "viscoelastic.json").stat().st_mtime_ns == before
 
@@ -181,7 +184,8 @@ def test_workers_same_numbers(compare_run, tmp_path):
 
     out = tmp_path / "w1"
     assert main(["compare", "--out", str(out), "--laws", "viscoelastic", *TINY, "--evidence",
-                 "bridge", "--workers", "1", "--config", _no_figures(tmp_path)]) == 0
+                 "bridge", "--observables", "shift+q", "--workers", "1",
+                 "--config", _no_figures(tmp_path)]) == 0
     pa, pb = (az.from_netcdf(d / "idata" / "viscoelastic.nc").posterior
               for d in (compare_run, out))
     # round-off, not bit for bit: in CI the worker's draws differed from the in-process
@@ -194,14 +198,18 @@ def test_workers_same_numbers(compare_run, tmp_path):
 
 
 def test_fit_one_law(tmp_path):
+    # the shift alone: nested sampling's cost grows with the dimension, and both
+    # estimators are what this checks
     assert main(["fit", "--law", "hertz", "--out", str(tmp_path / "fit"), *TINY,
-                 "--evidence", "bridge,ns", "--config", _no_figures(tmp_path)]) == 0
+                 "--evidence", "bridge,ns", "--observables", "shift",
+                 "--config", _no_figures(tmp_path)]) == 0
     table = pd.read_csv(StringIO((tmp_path / "fit" / "comparison.csv").read_text()))
     assert list(table["law"]) == ["hertz"]
     summary = json.loads((tmp_path / "fit" / "laws" / "hertz.json").read_text())
     assert set(summary["evidence"]) == {"ns", "bridge"}
     assert summary["log_z_method"] == "bridge_sampling"  # the first listed ranks
     assert summary["evidence_agree"] in (True, False)
+    assert summary["observables"] == ["f0", "shift"]
     assert "cross-check" not in (tmp_path / "fit" / "report.md").read_text()
 
 

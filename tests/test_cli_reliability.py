@@ -434,7 +434,9 @@ def runs(tmp_path_factory):
     """One output folder taken through a sequence of runs (each stage is one test below)."""
     tmp = tmp_path_factory.mktemp("reliability")
     out = tmp / "run"
-    base = ["--out", str(out), *TINY]
+    # the shift and Q: what is checked is the command's handling of the runs, and the
+    # amplitude ratios only add compilation here
+    base = ["--out", str(out), *TINY, "--observables", "shift+q"]
     cfg_a = _config(tmp / "a.toml", NOFIG)
     stages = {}
     laws = f"hertz,{OTHER}"
