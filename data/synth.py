@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from beadrod.data.rounding import significant
+
 __all__ = ["WORLDS", "DEFAULT_SEED", "generate", "write_world", "world_names"]
 
 DEFAULT_SEED = 441
@@ -81,11 +83,6 @@ _HERTZ_DYNAMICS = {
 
 def world_names() -> list[str]:
     return list(WORLDS)
-
-
-def _sig(x: np.ndarray, digits: int) -> np.ndarray:
-    """Round to ``digits`` significant figures (as an instrument prints them)."""
-    return np.array([float(f"{v:.{digits - 1}e}") for v in np.atleast_1d(x)])
 
 
 def _rounded(obj: Any, digits: int = 12) -> Any:
@@ -144,9 +141,9 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     design = []
     for p in range(P):
         delta0 = 1.5 * load / (mass * (2.0 * math.pi * f0[p]) ** 2)
-        v_drive = _sig(np.geomspace(x_first[p], x_max[p], n_steps[p]) * delta0
+        v_drive = significant(np.geomspace(x_first[p], x_max[p], n_steps[p]) * delta0
                        / (q[p] * d_per_v), 4)
-        v_ref = float(_sig(cfg["x_reference"] * delta0 / (q[p] * d_per_v), 4)[0])
+        v_ref = float(significant(cfg["x_reference"] * delta0 / (q[p] * d_per_v), 4)[0])
         design.append((v_drive, v_ref))
     with jax.enable_x64(True):
         a_damp = float(viscoelastic.damping_constant(
@@ -181,8 +178,8 @@ def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
 
         def sweep(step, kind, direction, volt, f_clean, a_clean, pid=pid, qp=q[p]):
             f_obs = round(f_clean + rng.normal(0.0, cfg["noise_f_Hz"]), 2)
-            a_obs = float(_sig(a_clean * math.exp(rng.normal(0.0, cfg["noise_amplitude_rel"])),
-                               4)[0])
+            noise = math.exp(rng.normal(0.0, cfg["noise_amplitude_rel"]))
+            a_obs = float(significant(a_clean * noise, 4)[0])
             q_obs = (round(qp * math.exp(rng.normal(0.0, cfg["noise_q_rel"])), 1)
                      if kind == "reference" else math.nan)
             rows.append({"protocol": pid, "step": step, "kind": kind, "direction": direction,
@@ -283,9 +280,9 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
 
     sweeps = []  # (p, step, kind, direction, voltage)
     for p in range(P):
-        v_drive = _sig(np.geomspace(x_first[p], x_max[p], n_steps[p]) * delta0[p]
+        v_drive = significant(np.geomspace(x_first[p], x_max[p], n_steps[p]) * delta0[p]
                        / (q[p] * d_per_v), 4)
-        v_ref = float(_sig(cfg["x_reference"] * delta0[p] / (q[p] * d_per_v), 4)[0])
+        v_ref = float(significant(cfg["x_reference"] * delta0[p] / (q[p] * d_per_v), 4)[0])
         sweeps.append((p, 0, "reference", "up", v_ref))
         for k, v in enumerate(v_drive):
             sweeps += [(p, 2 * k + 1, "drive", "up", float(v)),
@@ -307,7 +304,7 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
             rng.normal(0.0, cfg["noise_curve_rel"], size=om.size)))
         rows.append({"protocol": ids[p], "step": step, "kind": kind, "direction": direction,
                      "drive_voltage_V": v, "f_res_Hz": round(noisy.f_res, 2),
-                     "amplitude_m": float(_sig(noisy.amplitude, 4)[0]),
+                     "amplitude_m": float(significant(noisy.amplitude, 4)[0]),
                      "q_factor": round(noisy.q, 1) if kind == "reference" else math.nan})
         if kind == "reference" and step == 0:
             clean_ref[p] = (clean.f_res, clean.amplitude, clean.q, v)

@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from beadrod.data.rounding import significant
+
 __all__ = ["HYSTERETIC", "hysteretic"]
 
 HYSTERETIC = {
@@ -46,14 +48,6 @@ HYSTERETIC = {
     "noise_amplitude_rel": 0.01,
     "noise_q_rel": 0.05,
 }
-
-
-def _sig(x: Any, digits: int) -> np.ndarray:
-    x = np.atleast_1d(np.asarray(x, float))
-    with np.errstate(divide="ignore"):
-        mag = np.where(x != 0, np.floor(np.log10(np.abs(x))), 0.0)
-    scale = 10.0 ** (digits - 1 - mag)
-    return np.round(x * scale) / scale
 
 
 def hysteretic(seed: int, scene: Any, scene_dict: dict,
@@ -100,8 +94,8 @@ def hysteretic(seed: int, scene: Any, scene_dict: dict,
             x_drive = np.geomspace(x_first[p], x_max[p], n_steps[p])
             om_d, loss_d = state(x_drive, lin)
             om_r, loss_r = state(np.array([cfg["x_reference"]]), lin)
-            v_drive = _sig(x_drive * loss_d * delta0[p] / (om_d**2 * d_per_v), 4)
-            v_ref = float(_sig(cfg["x_reference"] * loss_r * delta0[p]
+            v_drive = significant(x_drive * loss_d * delta0[p] / (om_d**2 * d_per_v), 4)
+            v_ref = float(significant(cfg["x_reference"] * loss_r * delta0[p]
                                / (om_r**2 * d_per_v), 4)[0])
             # the clean amplitude at the rounded voltage: the peak's x moves with V
             # (x L(x)/Omega^2 is monotone here), so solve it back by a few Newton steps
@@ -116,7 +110,7 @@ def hysteretic(seed: int, scene: Any, scene_dict: dict,
             def sweep(step, kind, direction, volt, f_clean, a_clean, q_clean=math.nan,
                       pid=pid):
                 f_obs = round(f_clean + rng.normal(0.0, cfg["noise_f_Hz"]), 2)
-                a_obs = float(_sig(a_clean * math.exp(
+                a_obs = float(significant(a_clean * math.exp(
                     rng.normal(0.0, cfg["noise_amplitude_rel"])), 4)[0])
                 q_obs = (round(q_clean * math.exp(rng.normal(0.0, cfg["noise_q_rel"])), 1)
                          if kind == "reference" else math.nan)

@@ -28,25 +28,15 @@ from beadrod.inference.evidence.bridge import (
 )
 from beadrod.inference.evidence.importance import importance_sampling_log_z
 from beadrod.inference.evidence.log_z import linear_gaussian_log_evidence
-
-RNG = np.random.default_rng(7)
-X = RNG.normal(size=(25, 2))
-Y = X @ np.array([0.7, -0.4]) + 0.3 * RNG.normal(size=25)
-PRIOR_SD, NOISE_SD = 1.0, 0.3
-
-
-def linear_model(y=None):
-    theta = numpyro.sample("theta", dist.Normal(0.0, PRIOR_SD).expand([2]).to_event(1))
-    numpyro.sample("y", dist.Normal(jnp.asarray(X) @ theta, NOISE_SD).to_event(1), obs=y)
-
-
-Y_SCALE = np.array([0.5, -1.2, 0.8, 2.0, -0.3, 1.1])
-
-
-def scale_model(y=None):
-    tau = numpyro.sample("tau", dist.LogNormal(0.0, 1.0))
-    numpyro.sample("y", dist.Normal(0.0, tau).expand([len(Y_SCALE)]).to_event(1), obs=y)
-
+from tests.test_evidence import (  # the toys there, with the same data
+    NOISE_SD,
+    PRIOR_SD,
+    Y_SCALE,
+    X,
+    Y,
+    linear_model,
+    scale_model,
+)
 
 _RB = np.random.default_rng(3)
 XB = _RB.normal(size=(20, 2))

@@ -21,13 +21,13 @@ from beadrod.models.rungs import DEFAULT_RUNG, FIT_RUNGS
 
 __all__ = ["DEFAULTS", "DESCRIPTIONS", "EVIDENCE_METHODS", "RUNGS", "SHIFT_REFERENCES",
            "ConfigError", "load_config", "merge", "resolve", "to_toml", "leaf_keys",
-           "describe", "normalise_laws", "SEED_MAX", "usable_cores"]
+           "describe", "normalise_laws", "SEED_MAX", "usable_cores", "OBSERVABLES",
+           "observables", "shift_noise"]
 
 # the fit rungs, from the one list of rungs (models.rungs imports no JAX, so the CLI builds
 # its parsers without starting it)
 RUNGS = FIT_RUNGS
 OBSERVABLES = ("all", "shift+q", "shift")
-SHIFT_NOISES = ("protocol", "constant")  # inference.model.shift_noise.SHIFT_NOISES
 # data.process.process(shift_reference=...): the reference sweep each shift is taken against
 SHIFT_REFERENCES = ("first", "preceding")
 
@@ -302,6 +302,8 @@ def _check_values(cfg: dict[str, Any], known_laws: Sequence[str] | None) -> None
     _choice(cfg["rung"], "rung", RUNGS)
     _choice(cfg["likelihood"]["shift_reference"], "likelihood.shift_reference",
             SHIFT_REFERENCES)
+    from beadrod.inference.model.shift_noise import SHIFT_NOISES
+
     _choice(cfg["likelihood"]["shift_noise"], "likelihood.shift_noise", SHIFT_NOISES)
     _choice(cfg["likelihood"]["observables"], "likelihood.observables", OBSERVABLES)
     methods = cfg["evidence"]["methods"]
@@ -442,3 +444,17 @@ def to_toml(cfg: dict[str, Any]) -> str:
         for key, val in table.items():
             lines.append(f"# {key} = (default)" if val is None else f"{key} = {_fmt(val)}")
     return "\n".join(lines) + "\n"
+
+
+def observables(cfg: dict[str, Any]) -> tuple[bool, bool]:
+    """(Q, amplitude): whether the reference Q and the amplitude ratios enter the
+    likelihood, from likelihood.observables (and likelihood.use_q, which can only take Q
+    out)."""
+    lik = cfg.get("likelihood", {})
+    which = str(lik.get("observables", "all"))
+    return (bool(lik.get("use_q", True)) and which != "shift", which == "all")
+
+
+def shift_noise(cfg: dict[str, Any]) -> str:
+    """The shifts' noise model the configuration asks for (likelihood.shift_noise)."""
+    return str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))

@@ -66,9 +66,8 @@ def amplitude_inputs(ds: Any) -> dict[str, Any]:
     """The amplitude observable's model inputs from a processed dataset: ``amp_obs`` (the
     observed a_i of the usable sweeps), ``amp_idx`` (their sweep indices), ``amp_proto``
     (their protocols), ``ref_amplitude`` (P,) [m] and ``q_plugin`` (P,) (1/L0,p)."""
-    usable = np.asarray(getattr(ds, "drive_amplitude_usable", None)
-                        if getattr(ds, "drive_amplitude_usable", None) is not None
-                        else np.ones(len(ds.drive_shift), bool), bool)
+    usable = getattr(ds, "drive_amplitude_usable", None)
+    usable = np.ones(len(ds.drive_shift), bool) if usable is None else np.asarray(usable, bool)
     idx = np.flatnonzero(usable)
     proto = np.asarray(ds.drive_protocol, int)
     a_ref = np.asarray(ds.ref_amplitude, float)

@@ -273,10 +273,9 @@ def _law_model(spec: ModelSpec, data: dict) -> None:
             numpyro.factor("law_domain", jnp.where(inside, 0.0, -jnp.inf))
         observe_drive(spec, curve, data, None if residual is None
                       else sums(residual, theta, steps.residual_sums))
-    q_pred = None
-    if spec.use_q or (spec.use_amplitude and law.predicts_q):
-        if law.predicts_q:
-            q_pred = numpyro.deterministic("q_pred", law.quality_factor(omega0=omega0, **kw))
+    # the law's Q: its density where Q is observed, its linear loss for the amplitudes
+    q_pred = (numpyro.deterministic("q_pred", law.quality_factor(omega0=omega0, **kw))
+              if law.predicts_q and (spec.use_q or spec.use_amplitude) else None)
     if spec.use_q:
         if q_pred is not None:
             sigma = numpyro.sample("sigma_logq", prior("sigma_logq", spec.overrides))

@@ -26,6 +26,7 @@ __all__ = [
     "overlap_from_frequency",
     "frequency_from_overlap",
     "stiffness_constant",
+    "mechanics",
 ]
 
 EXPONENT = 1.5
@@ -81,6 +82,22 @@ def frequency_from_overlap(delta0: ArrayLike, load: ArrayLike, mass: ArrayLike) 
     return jnp.sqrt(1.5 * load / (mass * delta0)) / (2.0 * jnp.pi)
 
 
+def mechanics() -> dict:
+    """The Hertz contact's entries of :class:`models.law.Physics` (force, static overlap,
+    and the overlap-frequency map under the weight), for every law whose elastic contact
+    is Hertz's (Hertz, the viscoelastic laws, Hertz with hysteresis)."""
+    return {
+        "force": lambda delta, *, e_star, radius, **_: force(delta, e_star=e_star,
+                                                             radius=radius),
+        "static_overlap": lambda *, load, e_star, radius, **_: static_overlap(
+            load, e_star=e_star, radius=radius),
+        "overlap_from_frequency": lambda f0, *, load, mass, **_: overlap_from_frequency(
+            f0, load, mass),
+        "frequency_from_overlap": lambda d, *, load, mass, **_: frequency_from_overlap(
+            d, load, mass),
+    }
+
+
 def _law():
     from beadrod.models.ladder.first_order import first_order_hertz
     from beadrod.models.law import YOUNG, ContactLaw, Physics, Presentation
@@ -92,14 +109,7 @@ def _law():
         name="hertz",
         params=(YOUNG,),
         physics=Physics(
-            force=lambda delta, *, e_star, radius, **_: force(delta, e_star=e_star,
-                                                              radius=radius),
-            static_overlap=lambda *, load, e_star, radius, **_: static_overlap(
-                load, e_star=e_star, radius=radius),
-            overlap_from_frequency=lambda f0, *, load, mass, **_: overlap_from_frequency(
-                f0, load, mass),
-            frequency_from_overlap=lambda d, *, load, mass, **_: frequency_from_overlap(
-                d, load, mass),
+            **mechanics(),
             # the paper analysed this law at first order: its 'paper_eq25' rung is first order
             rungs=(*LADDER, "paper_eq25"),
             shifts={"first_order": lambda x, **_: first_order_hertz(x),

@@ -108,14 +108,7 @@ def _law():
         name="hertz_hysteretic",
         params=(YOUNG, strength, exponent),
         physics=Physics(
-            force=lambda delta, *, e_star, radius, **_: hertz.force(delta, e_star=e_star,
-                                                                     radius=radius),
-            static_overlap=lambda *, load, e_star, radius, **_: hertz.static_overlap(
-                load, e_star=e_star, radius=radius),
-            overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
-                f0, load, mass),
-            frequency_from_overlap=lambda d, *, load, mass, **_: hertz.frequency_from_overlap(
-                d, load, mass),
+            **hertz.mechanics(),
             rungs=("first_order", "backbone"),
             shifts={"first_order": with_loops(lambda x, **_: first_order_hertz(x),
                                               shift_first_order),

@@ -257,14 +257,7 @@ def _law(split: bool):
         name="viscoelastic_split" if split else "viscoelastic",
         params=params,
         physics=Physics(
-            force=lambda delta, *, e_star, radius, **_: hertz.force(delta, e_star=e_star,
-                                                                     radius=radius),
-            static_overlap=lambda *, load, e_star, radius, **_: hertz.static_overlap(
-                load, e_star=e_star, radius=radius),
-            overlap_from_frequency=lambda f0, *, load, mass, **_: hertz.overlap_from_frequency(
-                f0, load, mass),
-            frequency_from_overlap=lambda d, *, load, mass, **_: hertz.frequency_from_overlap(
-                d, load, mass),
+            **hertz.mechanics(),
             rungs=(*LADDER, "paper_eq25"),
             shifts={"first_order": lambda x, **_: shift_first_order(x),
                     "backbone": lambda x, **_: backbone_shift_clipped(x, hertz.EXPONENT),

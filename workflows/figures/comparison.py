@@ -116,6 +116,7 @@ def theory_curves(scene: Any, x: np.ndarray, laws: Any = None) -> dict[str, Curv
 def fitted_specs(runs: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
     """ModelSpec of each fitted law (the run's own where it carries one, else rebuilt as
     the comparison built it); laws whose spec cannot be rebuilt are left out."""
+    from beadrod.workflows.config import shift_noise
     from beadrod.workflows.pipeline.fits import comparison_specs
 
     lik = "student_t" if cfg.get("likelihood", {}).get("robust") else "normal"
@@ -126,8 +127,8 @@ def fitted_specs(runs: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
             # the rung the law was fitted at (its summary says), not the default
             rung = run.summary.get("rung") or cfg.get("rung", "backbone")
             try:
-                spec = comparison_specs([name], rung, lik, shift_noise=str(
-                    cfg.get("likelihood", {}).get("shift_noise", "protocol")))[name]
+                spec = comparison_specs([name], rung, lik,
+                                        shift_noise=shift_noise(cfg))[name]
             except (ValueError, KeyError) as exc:
                 log.warning("figures: no model spec for %s (%s); its curves are left out",
                             name, exc)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from beadrod.data.io import atomic_path, write_json, write_text
+from beadrod.workflows.config import shift_noise
 
 __all__ = ["data_block", "exclusions", "tension", "tension_jobs", "nuts_eta", "fit_checks",
            "report_extras", "figures", "write_outputs"]
@@ -118,7 +119,7 @@ def tension_jobs(cfg: dict[str, Any], out: Path, rung: str, lik: str,
     from beadrod.workflows.pipeline.parallel import Job
 
     shared, split = _pair(pair)
-    noise = str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))
+    noise = shift_noise(cfg)
     # the viscosity from Q alone and from the shift alone: the amplitude ratios stay out
     jobs = [Job("tension:eta_q", "eta", "eta_q",
                 {"law": shared, "rung": rung, "likelihood": lik, "use_shift": False,

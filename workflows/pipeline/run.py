@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from beadrod.workflows.config import observables, shift_noise
 from beadrod.workflows.pipeline.fits import (
     LawRun,
     beadrod_version,
@@ -56,20 +57,6 @@ def model_specs(cfg: dict[str, Any], names: list[str] | None,
     use_q, use_amplitude = observables(cfg)
     return comparison_specs(names, rung or cfg["rung"], lik, use_q=use_q,
                             use_amplitude=use_amplitude, shift_noise=shift_noise(cfg))
-
-
-def observables(cfg: dict[str, Any]) -> tuple[bool, bool]:
-    """(Q, amplitude): whether the reference Q and the amplitude ratios enter the
-    likelihood, from likelihood.observables (and likelihood.use_q, which can only take Q
-    out)."""
-    lik = cfg.get("likelihood", {})
-    which = str(lik.get("observables", "all"))
-    return (bool(lik.get("use_q", True)) and which != "shift", which == "all")
-
-
-def shift_noise(cfg: dict[str, Any]) -> str:
-    """The shifts' noise model the configuration asks for (likelihood.shift_noise)."""
-    return str(cfg.get("likelihood", {}).get("shift_noise", "protocol"))
 
 
 def job_steps(job: Job) -> int:
