@@ -38,6 +38,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "beadrod.workflows.commands.simulate",
     "beadrod.workflows.commands.validate",
     "beadrod.workflows.commands.bench",
+    "beadrod.workflows.commands.campaign",
 )
 
 
