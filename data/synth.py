@@ -35,7 +35,8 @@ import pandas as pd
 
 from beadrod.data.rounding import significant
 
-__all__ = ["WORLDS", "DEFAULT_SEED", "generate", "write_world", "world_names"]
+__all__ = ["WORLDS", "DEFAULT_SEED", "generate", "write_world", "world_names",
+           "world_parameters", "WorldParameterError"]
 
 DEFAULT_SEED = 441
 """Seed of the embedded folders (the paper's volume, J. Sound Vib. 441)."""
@@ -113,13 +114,13 @@ def _paper_scene(world: str = "paper_like") -> tuple[Any, dict]:
     return scenes.scene_from_dict(d, "paper_like"), d
 
 
-def _paper_like(seed: int) -> tuple[pd.DataFrame, dict, dict]:
+def _paper_like(seed: int, **overrides: Any) -> tuple[pd.DataFrame, dict, dict]:
     import jax
     import jax.numpy as jnp
 
     from beadrod.models.laws import hertz, viscoelastic
 
-    cfg = _PAPER_LIKE
+    cfg = {**_PAPER_LIKE, **overrides}
     rng = np.random.default_rng(seed)
     scene, scene_dict = _paper_scene()
     mass, load = float(scene.mass), float(scene.load)
@@ -256,7 +257,7 @@ def _hbm_sweeps(zeta: np.ndarray, drive: np.ndarray, down: np.ndarray, cfg: dict
         return om, np.asarray(x, np.float64), np.asarray(ok)
 
 
-def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
+def _hertz_dynamics(seed: int, **overrides: Any) -> tuple[pd.DataFrame, dict, dict]:
     """Physical world: each sweep a stepped harmonic-balance sweep (ladder rung 4) of the
     base-excited Hertz oscillator with a linear contact dashpot (Q_p = 1/(2 zeta_p)),
     read by :func:`data.extract.extract_resonance` from the curve with 1 % vibrometer
@@ -264,7 +265,7 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     contact) sets f0_p = (1/2 pi)(3 g / (2 delta0_p))^(1/2)."""
     from beadrod.data.extract import extract_resonance
 
-    cfg = _HERTZ_DYNAMICS
+    cfg = {**_HERTZ_DYNAMICS, **overrides}
     rng = np.random.default_rng(seed)
     scene, scene_dict = _paper_scene("hertz_dynamics")
     mass, load = float(scene.mass), float(scene.load)
@@ -338,26 +339,96 @@ def _hertz_dynamics(seed: int) -> tuple[pd.DataFrame, dict, dict]:
     return pd.DataFrame(rows), scene_dict, truth
 
 
-def generate(
-    world: str = "paper_like", seed: int = DEFAULT_SEED
-) -> tuple[pd.DataFrame, dict, dict]:
-    """(measurement table, scene dict, truth dict) of a synthetic world."""
+class WorldParameterError(ValueError):
+    """A world parameter override that the world does not have, or of the wrong kind."""
+
+
+def world_parameters(world: str) -> dict[str, Any]:
+    """The parameters of ``world`` that :func:`generate` can override, with their defaults
+    (a copy: strengths, exponents, ranges [low, high], counts, noise levels)."""
     if world not in WORLDS:
         raise ValueError(f"unknown world {world!r}; known: {', '.join(WORLDS)}")
+    if world == "hysteretic":
+        from beadrod.data.worlds_loss import HYSTERETIC
+
+        return dict(HYSTERETIC)
+    return dict(_HERTZ_DYNAMICS if world == "hertz_dynamics" else _PAPER_LIKE)
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _checked(world: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """``overrides`` checked against the world's defaults: known names, the same kind of
+    value (an integer for a count, a number, or a list of as many numbers, in increasing
+    order for a range), never negative. The physics checks the rest when it runs."""
+    base = world_parameters(world)
+    out: dict[str, Any] = {}
+    for key, value in overrides.items():
+        if key not in base:
+            raise WorldParameterError(
+                f"world {world!r} has no parameter {key!r}; it has: {', '.join(base)}")
+        default = base[key]
+        where = f"world {world!r} parameter {key!r}"
+        if isinstance(default, list):
+            if not (isinstance(value, list | tuple) and len(value) == len(default)
+                    and all(_number(v) for v in value)):
+                raise WorldParameterError(
+                    f"{where} takes a list of {len(default)} numbers, got {value!r}")
+            value = [type(d)(v) if isinstance(d, int) else float(v)
+                     for d, v in zip(default, value)]
+            if key.endswith("_range") or "_range_" in key:
+                if value[0] > value[1]:
+                    raise WorldParameterError(f"{where}: a range [low, high] with "
+                                              f"low <= high, got {value!r}")
+        elif isinstance(default, int):
+            if not (_number(value) and float(value).is_integer()):
+                raise WorldParameterError(f"{where} takes an integer, got {value!r}")
+            value = int(value)
+        elif not _number(value):
+            raise WorldParameterError(f"{where} takes a finite number, got {value!r}")
+        else:
+            value = float(value)
+        if any(v < 0 for v in (value if isinstance(value, list) else [value])):
+            raise WorldParameterError(f"{where} must not be negative, got {value!r}")
+        out[key] = value
+    merged = {**base, **out}
+    if merged.get("n_protocols", 1) < 1:
+        raise WorldParameterError(f"world {world!r} needs n_protocols >= 1")
+    if merged.get("n_tripping", 0) > merged["n_protocols"]:
+        raise WorldParameterError(
+            f"world {world!r}: n_tripping ({merged['n_tripping']}) exceeds n_protocols "
+            f"({merged['n_protocols']})")
+    return out
+
+
+def generate(
+    world: str = "paper_like", seed: int = DEFAULT_SEED,
+    overrides: dict[str, Any] | None = None,
+) -> tuple[pd.DataFrame, dict, dict]:
+    """(measurement table, scene dict, truth dict) of a synthetic world; ``overrides``
+    replace entries of :func:`world_parameters` (recorded in the truth)."""
+    if world not in WORLDS:
+        raise ValueError(f"unknown world {world!r}; known: {', '.join(WORLDS)}")
+    overrides = _checked(world, dict(overrides or {}))
     if world == "hysteretic":
         from beadrod.data.worlds_loss import hysteretic
 
         scene, scene_dict = _paper_scene(world)
-        table, scene_dict, truth = hysteretic(int(seed), scene, scene_dict)
+        table, scene_dict, truth = hysteretic(int(seed), scene, scene_dict, **overrides)
     else:
         table, scene_dict, truth = (_hertz_dynamics if world == "hertz_dynamics"
-                                    else _paper_like)(int(seed))
+                                    else _paper_like)(int(seed), **overrides)
+    if overrides:
+        truth["overrides"] = overrides
     return table, scene_dict, _rounded(truth)
 
 
-def write_world(world: str, out_dir: str | Path, seed: int = DEFAULT_SEED) -> Path:
+def write_world(world: str, out_dir: str | Path, seed: int = DEFAULT_SEED,
+                overrides: dict[str, Any] | None = None) -> Path:
     """Generate a world and write it as a dataset folder; return the folder."""
     from beadrod.data.load import write_dataset
 
-    table, scene_dict, truth = generate(world, seed)
+    table, scene_dict, truth = generate(world, seed, overrides)
     return write_dataset(out_dir, table, scene_dict, truth)

@@ -547,14 +547,17 @@ def shift(law: str, x: float | Sequence[float], *, rung: str = "first_order",
 
 
 def simulate(world: str = "paper_like", *, seed: int | None = None,
-             out: str | os.PathLike[str] | None = None, force: bool = False) -> Dataset:
+             out: str | os.PathLike[str] | None = None, force: bool = False,
+             **parameters: Any) -> Dataset:
     """A synthetic dataset with a recorded ground truth (``.truth``), as
     ``beadrod simulate`` writes it: ``world`` among :func:`worlds`, ``seed`` in
     [0, 2**32 - 1] (default: the embedded folders' seed, which regenerates them bit for
     bit). With ``out`` the folder is written too (measurements.csv, scene.toml,
     truth.json; ``force`` replaces those of an earlier ``simulate`` there, never a file
     beadrod did not write); without, the dataset is held in memory (:func:`compare`
-    writes it into its own folder).
+    writes it into its own folder). ``parameters`` replace the world's defaults
+    (``beadrod.data.synth.world_parameters(world)`` lists them; ``beadrod simulate --set``),
+    and are recorded in ``truth["overrides"]``.
 
     Example::
 
@@ -562,11 +565,13 @@ def simulate(world: str = "paper_like", *, seed: int | None = None,
         >>> ds = beadrod.simulate("hertz_dynamics", seed=3)
         >>> ds.truth["seed"]
         3
+        >>> beadrod.simulate("hysteretic", seed=1, exponent=1.6).truth["overrides"]
+        {'exponent': 1.6}
     """
     _entry()
     from beadrod.data.load import MEASUREMENTS, SCENE, TRUTH
     from beadrod.data.load import load_dataset as load
-    from beadrod.data.synth import DEFAULT_SEED, WORLDS, write_world
+    from beadrod.data.synth import DEFAULT_SEED, WORLDS, WorldParameterError, write_world
     from beadrod.workflows.outdir import check_out, release
 
     if world not in WORLDS:
@@ -577,15 +582,18 @@ def simulate(world: str = "paper_like", *, seed: int | None = None,
             or not 0 <= seed < 2**32:
         raise UserError(f"--seed must be an integer in [0, 2**32 - 1], got {seed!r}")
     seed = int(seed)
-    if out is None:
-        with tempfile.TemporaryDirectory(prefix="beadrod-simulate-") as tmp:
-            # read back from files, so that it is checked as any dataset folder is
-            return load(write_world(world, tmp, seed=seed))
-    folder = Path(out)
-    check_out(folder, force=force, outputs=(MEASUREMENTS, SCENE, TRUTH),
-              command="simulate")
     try:
-        write_world(world, folder, seed=seed)
-    finally:
-        release(folder)
+        if out is None:
+            with tempfile.TemporaryDirectory(prefix="beadrod-simulate-") as tmp:
+                # read back from files, so that it is checked as any dataset folder is
+                return load(write_world(world, tmp, seed=seed, overrides=parameters))
+        folder = Path(out)
+        check_out(folder, force=force, outputs=(MEASUREMENTS, SCENE, TRUTH),
+                  command="simulate")
+        try:
+            write_world(world, folder, seed=seed, overrides=parameters)
+        finally:
+            release(folder)
+    except WorldParameterError as e:
+        raise UserError(str(e)) from None
     return load(folder)
