@@ -14,7 +14,16 @@ The contract (docs/adding-a-law.md has an example):
   > 0), zero for delta <= 0 unless ``ADHESIVE``. Its keyword arguments are law parameters
   (keys of ``PRIORS``) or scene quantities passed by name
   (:data:`models.law.SCENE_KEYS`: radius, young, poisson, e_star, load, mass, gravity,
-  roughness_rms, surface_energy).
+  roughness_rms, surface_energy);
+* optional, the law's own loss (docs/damping.md), which the amplitude likelihood reads
+  (:meth:`models.law.ContactLaw.loss`): ``LOSS_EXPONENT`` (a finite real >= 0), how its
+  linear loss scales with the resonance, L0 Omega^beta (with it the comparison fits no
+  background exponent for this law; without it, beta is fitted), and
+  ``loss_increment(x, *, ...)``, JAX-traceable, the loss Delta(1/Q) >= 0 it adds at the
+  amplitude x = delta_a/delta0, with keyword arguments as ``force``'s. It is checked at
+  the prior medians for finite values >= 0 at x = 0 ... 2 and finite gradients there in
+  the law's parameters (and in x for x > 0): write a power of x with a double ``where``
+  at x = 0. Every key of ``PRIORS`` is an argument of ``force`` or of ``loss_increment``.
 
 The file's law gets every rung the generic numerics give (first order, backbone), the
 default protocol-scatter treatment (a stiffness scale per protocol) and, when its
@@ -34,6 +43,7 @@ import dataclasses
 import importlib.util
 import inspect
 import math
+import numbers
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -65,6 +75,9 @@ NAME_MAX = 64
 # would accept a trailing newline
 _NAME = re.compile(rf"[A-Za-z][A-Za-z0-9_]{{0,{NAME_MAX - 1}}}")
 _QUANTILES = (0.01, 0.5, 0.99)
+# the amplitudes x = delta_a/delta0 loss_increment is checked at (x = 0: the limit of a
+# small sweep; 2: the end of the fast backbone's range)
+_LOSS_X = (0.0, 1e-6, 0.1, 0.5, 1.0, 2.0)
 # the parameters (a, b) for which a models.law.Prior of each kind is proper
 _PROPER = {"uniform": lambda a, b: a < b, "loguniform": lambda a, b: 0 < a < b,
            "lognormal": lambda a, b: a > 0 and b > 0, "normal": lambda a, b: b > 0,
@@ -205,25 +218,28 @@ def _law_of(path: Path, mod: Any, scene: dict[str, float],
     force = getattr(mod, "force", None)
     if not callable(force):
         raise _fail(path, "force(delta, *, ...) is missing")
-    sig = inspect.signature(force)
-    params = list(sig.parameters.values())
-    if not params or params[0].kind not in (params[0].POSITIONAL_ONLY,
-                                            params[0].POSITIONAL_OR_KEYWORD):
-        raise _fail(path, "force must take the overlap delta [m] as its first argument")
-    keys = [p.name for p in params[1:]]
-    for k in keys:
-        if k not in priors and k not in SCENE_KEYS:
-            raise _fail(path, f"force's argument {k!r} has no prior in PRIORS and is not a "
-                              f"scene quantity ({', '.join(SCENE_KEYS)})")
+    keys = _keywords(path, force, "force", "the overlap delta [m]", priors)
+    loss_exponent = _loss_exponent(path, mod)
+    increment = getattr(mod, "loss_increment", None)
+    if increment is not None and not callable(increment):
+        raise _fail(path, f"loss_increment must be a function loss_increment(x, *, ...) "
+                          f"(got {type(increment).__name__})")
+    loss_keys = (_keywords(path, increment, "loss_increment", "the amplitude x = "
+                           "delta_a/delta0", priors) if increment is not None else [])
     for k, pr in priors.items():
         if k in SCENE_KEYS and k != YOUNG.name:
             raise _fail(path, f"PRIORS[{k!r}] shadows a scene quantity: rename it")
-        if k not in keys:
-            raise _fail(path, f"PRIORS[{k!r}] is not an argument of force")
+        if k not in keys and k not in loss_keys:
+            raise _fail(path, f"PRIORS[{k!r}] is not an argument of force or loss_increment")
         _check_prior(path, k, pr)
 
+    # the law's functions get the resolved keywords (models.law, "Keyword conventions");
+    # the file's, the ones they name
     def user_force(delta, **kw):
         return force(delta, **{k: kw[k] for k in keys})
+
+    def user_loss(x, **kw):
+        return increment(x, **{k: kw[k] for k in loss_keys})
 
     # a fitted E (the one scene quantity a file may fit) is the built-in laws' E with the
     # file's prior: its unit, label, scene value and physical bounds come from YOUNG
@@ -232,26 +248,77 @@ def _law_of(path: Path, mod: Any, scene: dict[str, float],
                             "modulus, with the file's prior") if k == YOUNG.name else
         Param(k, "?", k, pr, f"law-file parameter {k}") for k, pr in priors.items())
     law = ContactLaw(
-        name=name, params=law_params, physics=Physics(force=user_force),
+        name=name, params=law_params,
+        physics=Physics(force=user_force, loss_exponent=loss_exponent,
+                        loss_increment=user_loss if increment is not None else None),
         presentation=Presentation(label=label, reference=reference, description=description),
         source=str(path))
     _check_force(path, law, scene, adhesive=adhesive)
+    if increment is not None:
+        _check_loss_increment(path, law, scene)
     return attach_fast_backbone(law, scene)
+
+
+def _keywords(path: Path, fn: Any, what: str, first: str, priors: dict) -> list[str]:
+    """The keyword arguments of the file's function ``fn`` (named ``what``): each a law
+    parameter (a key of ``priors``) or a scene quantity, after one positional argument
+    (``first``, in messages)."""
+    try:
+        params = list(inspect.signature(fn).parameters.values())
+    except (TypeError, ValueError):
+        raise _fail(path, f"{what} has no signature Python can read (write it with def)"
+                    ) from None
+    if not params or params[0].kind not in (params[0].POSITIONAL_ONLY,
+                                            params[0].POSITIONAL_OR_KEYWORD):
+        raise _fail(path, f"{what} must take {first} as its first argument")
+    keys = [p.name for p in params[1:]]
+    for k in keys:
+        if k not in priors and k not in SCENE_KEYS:
+            raise _fail(path, f"{what}'s argument {k!r} has no prior in PRIORS and is not a "
+                              f"scene quantity ({', '.join(SCENE_KEYS)})")
+    return keys
+
+
+def _loss_exponent(path: Path, mod: Any) -> float | None:
+    """The file's ``LOSS_EXPONENT`` as a float (None where it sets none)."""
+    value = getattr(mod, "LOSS_EXPONENT", None)
+    if value is None:
+        return None
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if not (ok and math.isfinite(float(value)) and float(value) >= 0.0):
+        raise _fail(path, f"LOSS_EXPONENT = {value!r}: it must be a finite real number >= 0 "
+                          "(its linear loss scales as Omega^LOSS_EXPONENT; e.g. 3 for "
+                          "Kuwabara-Kono); leave it out to have the background exponent fitted")
+    return float(value)
+
+
+def _medians(law: ContactLaw) -> dict[str, float]:
+    return {p.name: prior_median(p.prior) for p in law.params}
+
+
+def _run(path: Path, what: str, theta: dict[str, float], fn: Any) -> Any:
+    """``fn()``, the file's function ``what`` run at the prior medians ``theta``: whatever
+    it raises (sys.exit too) becomes a LawFileError; Ctrl-C goes through."""
+    try:
+        return fn()
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001  (the user's code, sys.exit too)
+        raise _fail(path, f"{what} " + _raised(exc, f"at the prior medians {theta}")) from exc
 
 
 def _check_force(path: Path, law: ContactLaw, scene: dict[str, float], *,
                  adhesive: bool) -> None:
-    theta = {p.name: prior_median(p.prior) for p in law.params}
+    theta = _medians(law)
     kw = law.resolve(scene, theta)
-    try:
+
+    def probe():
         d0 = float(law.overlap(**kw))
         f0, k0 = (float(v) for v in jax.jvp(lambda d: law.physics.force(d, **kw),
                                             (jnp.asarray(d0),), (jnp.asarray(1.0),)))
-        f_neg = float(law.physics.force(jnp.asarray(-0.5 * d0), **kw))
-    except KeyboardInterrupt:
-        raise
-    except BaseException as exc:  # noqa: BLE001  (the user's code, sys.exit too)
-        raise _fail(path, "force " + _raised(exc, f"at the prior medians {theta}")) from exc
+        return d0, f0, k0, float(law.physics.force(jnp.asarray(-0.5 * d0), **kw))
+
+    d0, f0, k0, f_neg = _run(path, "force", theta, probe)
     where = f"at the prior medians {theta}"
     if not (np.isfinite(f0) and np.isfinite(k0)):
         raise _fail(path, f"NaN or infinite force or stiffness at the static overlap "
@@ -265,3 +332,45 @@ def _check_force(path: Path, law: ContactLaw, scene: dict[str, float], *,
     if not adhesive and f_neg != 0.0:
         raise _fail(path, f"force({-0.5 * d0:.3g} m) = {f_neg:.4g} N: it must be zero for "
                           "delta <= 0 (contact lost) unless ADHESIVE = True")
+
+
+def _check_loss_increment(path: Path, law: ContactLaw, scene: dict[str, float]) -> None:
+    """The file's loss_increment at the prior medians: one finite value >= 0 at each
+    amplitude of :data:`_LOSS_X`, finite gradients there in the law's parameters (through
+    the resolved keywords, as the sampler takes them) and in x where x > 0."""
+    theta = _medians(law)
+    x = jnp.asarray(_LOSS_X)
+
+    def at(xi, th):   # at one amplitude: each x's gradient on its own
+        return jnp.reshape(law.physics.loss_increment(xi, **law.resolve(scene, th)), ())
+
+    def probe():
+        value = np.asarray(law.physics.loss_increment(x, **law.resolve(scene, theta)), float)
+        if value.shape not in ((), x.shape):
+            return value, None, None
+        th = {k: jnp.asarray(v, float) for k, v in theta.items()}
+        d_x, d_theta = jax.vmap(jax.grad(at, argnums=(0, 1)), in_axes=(0, None))(x, th)
+        return value, {k: np.asarray(v, float) for k, v in d_theta.items()}, np.asarray(d_x)
+
+    value, d_theta, d_x = _run(path, "loss_increment", theta, probe)
+    where = f"at the prior medians {theta}"
+    if d_theta is None:
+        raise _fail(path, f"loss_increment(x) at x = {list(_LOSS_X)} returned shape "
+                          f"{value.shape}: one value per amplitude expected")
+    value = np.broadcast_to(value, x.shape)
+    shown = ", ".join(f"{a:g}: {v:.4g}" for a, v in zip(_LOSS_X, value))
+    if not np.all(np.isfinite(value)):
+        raise _fail(path, f"NaN or infinite loss_increment {where} (x: value {shown})")
+    if np.any(value < 0):
+        raise _fail(path, f"negative loss_increment {where} (x: value {shown}); it is a loss "
+                          "added to the linear one, Delta(1/Q) >= 0")
+    for k, g in d_theta.items():
+        bad = [a for a, ok in zip(_LOSS_X, np.isfinite(g)) if not ok]
+        if bad:
+            raise _fail(path, f"loss_increment has a NaN or infinite gradient in {k} at x = "
+                              f"{bad} {where} (at x = 0, write a power of x with a double "
+                              "where: docs/adding-a-law.md)")
+    bad = [a for a, ok in zip(_LOSS_X, np.isfinite(d_x)) if a > 0 and not ok]
+    if bad:
+        raise _fail(path, f"loss_increment has a NaN or infinite gradient in x at x = {bad} "
+                          f"{where}")
