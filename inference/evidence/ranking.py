@@ -23,8 +23,9 @@ import pandas as pd
 
 from beadrod.inference.evidence.log_z import EvidenceResult, combined_agreement
 
-__all__ = ["DataHashMismatch", "loo_table", "evidence_table", "log_bayes_factor",
-           "rank_evidence", "loo_pit_summary", "loo_pit_values", "LOO_PIT_P_MIN"]
+__all__ = ["DataHashMismatch", "one_data_hash", "loo_table", "evidence_table",
+           "log_bayes_factor", "rank_evidence", "loo_pit_summary", "loo_pit_values",
+           "LOO_PIT_P_MIN"]
 
 LOO_PIT_P_MIN = 0.01
 """Kolmogorov-Smirnov p-value below which LOO-PIT values count as non-uniform."""
@@ -34,7 +35,9 @@ class DataHashMismatch(ValueError):
     """Models fitted to different data were put in one comparison."""
 
 
-def _one_hash(hashes: Mapping[str, str | None]) -> str:
+def one_data_hash(hashes: Mapping[str, str | None]) -> str:
+    """The one data hash of ``hashes`` (model -> hash of the data it was fitted to);
+    :class:`DataHashMismatch` where one is missing or two differ."""
     missing = [k for k, h in hashes.items() if not h]
     if missing:
         raise DataHashMismatch(f"no data hash recorded for {missing}: cannot compare safely")
@@ -48,7 +51,8 @@ def _one_hash(hashes: Mapping[str, str | None]) -> str:
 def loo_table(idatas: Mapping[str, az.InferenceData], *, var_name: str = "shift_obs",
               data_hash: str | None = None) -> pd.DataFrame:
     """``arviz.compare`` (PSIS-LOO on ``var_name``) plus data hash and diagnostics flags."""
-    h = _one_hash({k: v.posterior.attrs.get("data_hash", data_hash) for k, v in idatas.items()})
+    h = one_data_hash({k: v.posterior.attrs.get("data_hash", data_hash)
+                       for k, v in idatas.items()})
     table = az.compare(dict(idatas), ic="loo", var_name=var_name)
     table["diagnostics"] = [idatas[k].posterior.attrs.get("diagnostics", "unchecked")
                             for k in table.index]
@@ -65,7 +69,7 @@ def evidence_table(results: Mapping[str, Mapping[str, EvidenceResult]],
     ``results[model]`` maps estimator name ('nested_sampling', 'tempered_smc') to its
     result; ``data_hashes[model]`` the hash of the data that model was fitted to.
     """
-    h = _one_hash({k: data_hashes.get(k) for k in results})
+    h = one_data_hash({k: data_hashes.get(k) for k in results})
     rows = []
     for model, est in results.items():
         row: dict[str, object] = {"model": model}

@@ -36,6 +36,7 @@ reference's error, sigma_a the sweep's). Their priors are in :mod:`inference.mod
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import jax.numpy as jnp
@@ -47,7 +48,8 @@ from beadrod.inference.model.shift_noise import ProtocolNormal
 from beadrod.inference.speed.residual_fold import POINTWISE
 
 __all__ = ["AMPLITUDE_KEYS", "amplitude_inputs", "has_amplitudes", "linear_loss_plugin",
-           "predicted_ratio", "observe_amplitude"]
+           "predicted_ratio", "observe_amplitude", "eq31", "loss_change_from_ratio",
+           "LossPoints", "loss_points"]
 
 AMPLITUDE_KEYS = ("amp_obs", "amp_idx", "amp_proto", "ref_amplitude", "q_plugin")
 """The model inputs of the amplitude observable (:func:`amplitude_inputs`)."""
@@ -92,6 +94,55 @@ def has_amplitudes(data: dict) -> bool:
 def predicted_ratio(*, omega_ratio: Any, loss: Any, loss_ref: Any) -> jnp.ndarray:
     """2 ln Omega - ln L(x) + ln L(x_ref) [-]: the predicted a_i before the offset."""
     return 2.0 * jnp.log(omega_ratio) - jnp.log(loss) + jnp.log(loss_ref)
+
+
+def eq31(a: Any, q_ref: Any) -> np.ndarray:
+    """Delta(1/Q) = (1/Q_ref)(exp(-a) - 1) [-] of log amplitude ratios ``a`` (paper Eq. 31:
+    (1/Q_ref)(V delta_ref/(V_ref delta) - 1)), with the reference's Q_ref [-]."""
+    return np.expm1(-np.asarray(a, float)) / np.asarray(q_ref, float)
+
+
+def loss_change_from_ratio(a: Any, omega_ratio: Any, q_ref: Any) -> np.ndarray:
+    """L(x) - L0 = (1/Q_ref)(Omega^2 exp(-a) - 1) [-]: the loss change a measured ratio
+    ``a`` implies once the base excitation's Omega^2 is taken out (the inverse of
+    :func:`predicted_ratio` with L(x_ref) = 1/Q_ref; ``omega_ratio`` = f_res/f0 [-]).
+    Eq. 31 (:func:`eq31`) is this without the Omega^2: it reads a loss that does not change
+    as a widening of 2|Delta f/f0|/Q_ref (docs/damping.md)."""
+    w = np.asarray(omega_ratio, float)
+    return (np.square(w) * np.exp(-np.asarray(a, float)) - 1.0) / np.asarray(q_ref, float)
+
+
+@dataclass(frozen=True)
+class LossPoints:
+    """The usable drive sweeps' loss against shift, from the data alone (N usable,):
+    ``x`` = delta_a/delta0,p with delta0,p the Hertz overlap the measured f0_p implies [-];
+    ``shift`` Delta f/f0 [-]; ``eq31`` the paper's Delta(1/Q) (:func:`eq31`) [-];
+    ``loss_change`` the same with the base excitation taken out
+    (:func:`loss_change_from_ratio`) [-]; ``q_ref`` the protocol's measured reference Q
+    [-]; ``direction`` 0 up, 1 down."""
+
+    x: np.ndarray
+    shift: np.ndarray
+    eq31: np.ndarray
+    loss_change: np.ndarray
+    q_ref: np.ndarray
+    direction: np.ndarray
+
+
+def loss_points(ds: Any) -> LossPoints:
+    """:class:`LossPoints` of a processed dataset: the drive sweeps whose amplitude ratio is
+    defined and whose protocol has a measured reference Q (the sweeps the paper's Fig. 10
+    shows)."""
+    proto = np.asarray(ds.drive_protocol, int)
+    q = np.asarray(ds.q_ref, float)[proto]
+    inv_q = np.asarray(ds.drive_inv_q_shift, float)
+    ok = np.isfinite(inv_q) & np.isfinite(q) & (q > 0)
+    a = -np.log1p(inv_q[ok] * q[ok])  # the ratio behind Eq. 31, read back
+    shift = np.asarray(ds.drive_shift, float)[ok]
+    x = np.asarray(ds.normalized_amplitude("f0"), float)[ok]
+    return LossPoints(x=x, shift=shift, eq31=inv_q[ok],
+                      loss_change=loss_change_from_ratio(a, 1.0 + shift, q[ok]), q_ref=q[ok],
+                      direction=np.asarray(ds.drive_direction, int)[ok])
 
 
 def observe_amplitude(spec: Any, ratio: jnp.ndarray, data: dict) -> None:

@@ -26,7 +26,8 @@ from beadrod.inference.speed.residual_fold import log_likelihood as residual_log
 from beadrod.models.scene import materials
 
 __all__ = ["baseline_curve", "baseline_model", "observe_drive", "nuisance_q",
-           "reference_scale", "PIVOT_POWER", "BASELINE_PARAMS"]
+           "reference_scale", "amplitude_scale", "log_loss_change", "PIVOT_POWER",
+           "BASELINE_PARAMS"]
 
 BASELINE_PARAMS = ("amp", "power")
 """The baseline's curve parameters (posterior curve draws use them)."""
@@ -34,8 +35,7 @@ BASELINE_PARAMS = ("amp", "power")
 
 def baseline_curve(amp, power, amplitude, f0):
     """-amp (delta_a (2 pi f0)^2 / g)^power [-] (amplitude [m], f0 [Hz])."""
-    xs = amplitude * jnp.square(2.0 * jnp.pi * jnp.abs(f0)) / materials.G_STANDARD
-    return -amp * jnp.power(xs, power)
+    return -amp * jnp.power(amplitude_scale(amplitude, f0), power)
 
 
 def nuisance_q(spec: Any, data: dict) -> None:
@@ -85,8 +85,17 @@ def observe_drive(spec: Any, curve: jnp.ndarray, data: dict,
         sums, offset, sigma, int(d.shape[0]), jnp.sum(d * d)))
 
 
-def _scale(amplitude, f0):
+def amplitude_scale(amplitude, f0):
+    """xs = delta_a (2 pi f0)^2 / g [-] (amplitude [m], f0 [Hz]): the baseline's amplitude
+    scale, delta_a over the overlap g/omega0^2 of a linear spring."""
     return amplitude * jnp.square(2.0 * jnp.pi * jnp.abs(f0)) / materials.G_STANDARD
+
+
+def log_loss_change(omega, xs_rel, *, beta, gain, power):
+    """ln L(x) - ln L0 = beta ln Omega + g (xs/xs_ref)^p [-]: the baseline's law-free loss
+    change, with ``omega`` = f_res/f0 and ``xs_rel`` = xs/xs_ref (:func:`amplitude_scale`,
+    :func:`reference_scale`)."""
+    return beta * jnp.log(omega) + gain * jnp.power(xs_rel, power)
 
 
 def _baseline_amplitude(spec: Any, curve: jnp.ndarray, xs_ref: jnp.ndarray, f0: jnp.ndarray,
@@ -98,9 +107,12 @@ def _baseline_amplitude(spec: Any, curve: jnp.ndarray, xs_ref: jnp.ndarray, f0: 
     power = numpyro.sample("loss_power", prior("loss_power", spec.overrides))
     idx, p_i = data["amp_idx"], data["amp_proto"]
     omega = jnp.maximum(1.0 + curve[idx], 1e-3)
-    rel = gain * jnp.power(_scale(data["amplitude"][idx], f0[p_i]) / xs_ref, power)
-    rel_ref = gain * jnp.power(_scale(data["ref_amplitude"], f0) / xs_ref, power)[p_i]
-    ratio = (2.0 - beta) * jnp.log(omega) - rel + rel_ref
+    ln_loss = log_loss_change(omega, amplitude_scale(data["amplitude"][idx], f0[p_i]) / xs_ref,
+                              beta=beta, gain=gain, power=power)
+    ln_loss_ref = log_loss_change(1.0, amplitude_scale(data["ref_amplitude"], f0) / xs_ref,
+                                  beta=beta, gain=gain, power=power)[p_i]
+    # predicted_ratio's 2 ln Omega - ln L(x) + ln L(x_ref), with L0 cancelled
+    ratio = 2.0 * jnp.log(omega) - ln_loss + ln_loss_ref
     observe_amplitude(spec, ratio, data)
 
 
@@ -119,7 +131,7 @@ def reference_scale(amplitude, f0):
     The geometric mean of xs does not decorrelate them (the large sweeps carry the
     information): Fisher correlation -0.98 on both embedded worlds, against 0.00
     (hertz_dynamics) and 0.20 (paper_like) here."""
-    ln_xs = jnp.log(amplitude * jnp.square(2.0 * jnp.pi * jnp.abs(f0)) / materials.G_STANDARD)
+    ln_xs = jnp.log(amplitude_scale(amplitude, f0))
     w = jnp.exp(2.0 * PIVOT_POWER * (ln_xs - jnp.max(ln_xs)))  # xs^(2 p0), rescaled
     return jnp.exp(jnp.sum(w * ln_xs) / jnp.sum(w))
 

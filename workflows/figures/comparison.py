@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from beadrod.inference.model.amplitude import loss_points
 from beadrod.workflows.figures import damping, gallery, numbers, styles
 from beadrod.workflows.figures.physics import Curve
 from beadrod.workflows.figures.pool import FigureWriter
@@ -192,12 +193,10 @@ def _damping_figures(save, runs, inputs, ds) -> None:
              "the 90 % band of the sweeps of each amplitude bin pooled, and the noise-free "
              "median. The x axis is delta_a/delta0,p with the law's own overlap (paper "
              "Fig. 10).", "fit")
-    usable = np.isfinite(np.asarray(ds.drive_inv_q_shift, float))
-    if usable.any():
-        save(damping.fig_loss_vs_shift(np.asarray(ds.drive_shift)[usable],
-                                       np.asarray(ds.drive_inv_q_shift)[usable],
-                                       np.asarray(ds.q_ref, float),
-                                       direction=np.asarray(ds.drive_direction)[usable]),
+    points = loss_points(ds)  # the loss-against-shift table's data row reads the same
+    if points.x.size:
+        save(damping.fig_loss_vs_shift(points.shift, points.eq31, np.asarray(ds.q_ref, float),
+                                       direction=points.direction),
              "loss_vs_shift",
              "Delta(1/Q) of paper Eq. 31 against -Delta f/f0 for each drive sweep, with "
              "what each mechanism predicts at the median reference Q: an elastic law with "

@@ -3,7 +3,8 @@ posterior predictive band, and the loss change against the frequency drop with w
 loss mechanism predicts for it.
 
 The amplitude observable a_i = ln(δ_i/V_i) − ln(δ_ref/V_ref) is shown as the paper's
-Eq. 31, Δ(1/Q) = (1/Q_ref,p)(exp(−a_i) − 1): the transform is monotone, so the quantiles
+Eq. 31, Δ(1/Q) = (1/Q_ref,p)(exp(−a_i) − 1) (:func:`inference.model.amplitude.eq31`): the
+transform is monotone, so the quantiles
 of the transformed draws are the transformed quantiles and the band says what the
 likelihood says. :func:`inv_q_panel` computes one law's numbers from its InferenceData;
 the figure functions only draw.
@@ -26,6 +27,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.patheffects import withStroke  # noqa: E402
 
+from beadrod.inference.model.amplitude import eq31  # noqa: E402
 from beadrod.models.laws.masing import loss_to_shift_ratio  # noqa: E402
 from beadrod.workflows.figures import styles  # noqa: E402
 from beadrod.workflows.figures.numbers import data_overlap  # noqa: E402
@@ -36,18 +38,13 @@ from beadrod.workflows.figures.physics import (  # noqa: E402
     scatter_by_direction,
 )
 
-__all__ = ["InvQPanel", "eq31", "inv_q_panel", "fig_inv_q_ppc", "fig_loss_vs_shift"]
+__all__ = ["InvQPanel", "inv_q_panel", "fig_inv_q_ppc", "fig_loss_vs_shift"]
 
 _INV_Q_LABEL = r"$\Delta(1/Q)$ (Eq. 31) [-]"
 # the three families of fig_loss_vs_shift: colour names the family (Tol high contrast)
 _ELASTIC, _VISCOUS, _HYSTERETIC = "#004488", "#DDAA33", "#BB5566"
 _BACKGROUND_NAMES = {0: "constant loss factor", 1: "constant dashpot",
                      2: "stiffness loss factor"}
-
-
-def eq31(a: Any, q_ref: Any) -> np.ndarray:
-    """Δ(1/Q) = (1/Q_ref)(exp(−a) − 1) [-] of log amplitude ratios ``a`` (paper Eq. 31)."""
-    return np.expm1(-np.asarray(a, float)) / np.asarray(q_ref, float)
 
 
 @dataclass(frozen=True)
