@@ -1,7 +1,8 @@
 """beadrod campaign's engine on a real Dask cluster: a campaign completes and writes its
 summary, a rerun runs nothing, a task that raises is FAILED while the rest complete, a
-worker killed mid-task gets its task retried, and an external scheduler (`dask
-scheduler` + `dask worker` as subprocesses) runs a campaign too.
+worker killed mid-task gets its task retried; in the slow suite, Ctrl-C keeps the
+finished records and closes the cluster, and an external scheduler (`dask scheduler` +
+`dask worker` as subprocesses) runs a campaign too.
 
 The tasks here are real SBC tasks (workflows.campaign.tasks.sbc_tasks: their inputs,
 keys, records and summary) run by a stand-in body that returns ranks at once instead of
@@ -47,6 +48,8 @@ def _stand_in(task, *, mode: str, folder: str):
     i = task.inputs["replicate"]
     if mode == "raise" and i == 1:
         raise RuntimeError("a task that raises")
+    if mode == "sleep" and i >= 1:
+        time.sleep(60)
     marker = Path(folder) / "killed"
     if mode == "kill" and i == 1 and not marker.exists():
         marker.write_text(str(os.getpid()))
@@ -140,6 +143,39 @@ def test_a_killed_worker_gets_its_task_retried(tmp_path):
     assert [r.split()[0] for r in _ran(log)].count(tasks[1].name) == 2  # run twice
 
 
+@pytest.mark.slow  # ~15-25 s on 2 cores: the default suite keeps the three above
+def test_ctrl_c_keeps_finished_records_and_closes_the_cluster(tmp_path):
+    import _thread
+    import threading
+
+    import psutil
+
+    out, log = tmp_path / "out", tmp_path / "log"
+    log.mkdir()
+    tasks = _tasks(3)
+    first = results.record_path(out, tasks[0].name)
+
+    def press_ctrl_c() -> None:
+        t0 = time.monotonic()
+        while not first.exists() and time.monotonic() - t0 < 120:
+            time.sleep(0.1)
+        _thread.interrupt_main()
+
+    threading.Thread(target=press_ctrl_c, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        _campaign(tasks, out, log, mode="sleep", workers=2)
+    assert results.read_record(out, tasks[0].name)["status"] == DONE
+    assert not results.record_path(out, tasks[1].name).exists()
+    assert not list(out.rglob(".*.part*"))
+    time.sleep(1.0)
+    # the workers and nannies are gone (multiprocessing's resource tracker stays: it
+    # belongs to this process's lifetime, whatever spawned a process)
+    alive = [p for p in psutil.Process().children(recursive=True) if p.is_running()
+             and p.status() != psutil.STATUS_ZOMBIE
+             and "resource_tracker" not in " ".join(p.cmdline())]
+    assert not alive, [p.cmdline() for p in alive]
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -154,6 +190,7 @@ def _wait_for(check, timeout: float = 60.0) -> None:
         time.sleep(0.5)
 
 
+@pytest.mark.slow  # ~15 s on 2 cores: two more processes start and import JAX
 def test_an_external_scheduler_runs_the_campaign(tmp_path):
     from distributed import Client
 

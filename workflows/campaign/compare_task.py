@@ -6,12 +6,14 @@ data.synth.write_world, the code of ``beadrod simulate``) into a private tempora
 runs the comparison there (workflows.commands.compare.run, the code of ``beadrod
 compare``, in this one process, without figures, report or tension fits) and returns what
 the campaign's summary reads: each law's evidence, gate and parameters, the preferred law,
-the world's truths. Nothing is left on the worker's disk: a campaign on a cluster assumes
-no shared file system.
+the world's truths, and the warnings it logged. Nothing is left on the worker's disk: a
+campaign on a cluster assumes no shared file system.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import tempfile
 import time
 from pathlib import Path
@@ -54,8 +56,10 @@ def run_compare_task(kind: str, inputs: dict[str, Any]) -> dict[str, Any]:
         cfg = dict(inputs["cfg"])
         cfg["data"] = str(data)
         out = Path(tmp) / "out"
+        said = io.StringIO()  # the comparison's warnings: into the record, not the console
         try:
-            result = run(cfg, out, report=False).result
+            with contextlib.redirect_stderr(said):
+                result = run(cfg, out, report=False).result
         finally:
             runtime.setup_logging(None, quiet=True)  # the log file was in the folder
     truth = (result.get("data") or {}).get("truth") or {}
@@ -63,4 +67,5 @@ def run_compare_task(kind: str, inputs: dict[str, Any]) -> dict[str, Any]:
             "data_hash": (result.get("data") or {}).get("hash"),
             "laws": [_law_row(r) for r in result["laws"]],
             "truth": {k: v.get("value") for k, v in (truth.get("values") or {}).items()},
+            "warnings": [ln for ln in said.getvalue().splitlines() if ln.strip()],
             "timings": {"total_s": time.perf_counter() - t0}}

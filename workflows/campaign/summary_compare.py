@@ -74,17 +74,22 @@ def _forest(done: dict[str, dict[str, Any]], law: str, path: Path) -> Path | Non
     shared = {k: v for k, v in per.items() if len(v) >= 2}
     if not shared:
         return None
-    n = len(shared)
-    fig, axes = plt.subplots(1, n, figsize=(3.0 * n, 0.5 + 0.35 * len(done)), squeeze=False,
-                             sharey=True)
     names = sorted(done)
-    for ax, (param, items) in zip(axes[0], shared.items()):
+    cols = min(4, len(shared))
+    rows = -(-len(shared) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, (1.2 + 0.3 * len(names)) * rows),
+                             squeeze=False)
+    for ax, (param, items) in zip(axes.ravel(), shared.items()):
         for name, p in items:
             y = names.index(name)
             ax.plot([p["q05"], p["q95"]], [y, y], color="C0", lw=1.5)
             ax.plot(p["mean"], y, "o", color="C0", ms=4)
         ax.set_title(f"{param} [{items[0][1].get('unit') or '-'}]", fontsize=9)
-    axes[0][0].set_yticks(range(len(names)), names, fontsize=8)
+        ax.set_yticks(range(len(names)), names, fontsize=7)
+        ax.set_ylim(-0.6, len(names) - 0.4)
+        ax.tick_params(axis="x", labelsize=7)
+    for ax in axes.ravel()[len(shared):]:
+        ax.axis("off")
     fig.suptitle(f"{law}: mean and 90 % interval per dataset", fontsize=9)
     fig.tight_layout()
     return _save(fig, path)
@@ -111,10 +116,19 @@ def _datasets(tasks: list[Task], records: dict[str, dict[str, Any]],
         flag = "**yes**" if rec["preferred"] != majority else ""
         md.append(f"| {name} | " + " | ".join(z.get(k, "–") for k in laws)
                   + f" | {rec['preferred']} | {flag} |")
-    fig = _forest(done, majority, out / "figures" / f"forest_{majority}.png")
+    shown = majority
+    if shown == "none":  # no law passed its gate: the law of the highest log Z, most often
+        top = Counter(max((r for r in rec["laws"] if r["name"] != "baseline"
+                           and r.get("log_z") is not None),
+                          key=lambda r: r["log_z"], default={"name": None})["name"]
+                      for rec in done.values())
+        shown = top.most_common(1)[0][0]
+        md += ["", f"No law passed its gate on most datasets: the forest plot shows {shown}, "
+               "the law of the highest log Z on most of them."]
+    fig = _forest(done, shown, out / "figures" / f"forest_{shown}.png") if shown else None
     if fig is not None:
         files.append(fig)
-        md += ["", f"![forest plot of {majority}'s parameters](figures/{fig.name})"]
+        md += ["", f"![forest plot of {shown}'s parameters](figures/{fig.name})"]
     return md, files
 
 
