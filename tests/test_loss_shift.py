@@ -199,6 +199,7 @@ def test_a_site_no_model_read_is_left_out_and_a_lone_law_wins_alone():
     loos = {"A": observables.site_loos(_toy({"shift_obs": 0.0}, sites=("shift_obs",)))}
     out = observables.preference_by_observable(loos, {})
     assert [c["site"] for c in out["observables"]] == ["shift_obs"]
+    assert out["unread"] == ["f0", "reference Q", "amplitude per volt"]
     c = out["observables"][0]
     assert c["preferred"] == "A" and c["runner_up"] is None and c["resolved"] is None
     assert math.isfinite(c["elpd"]["A"]["elpd_loo"])

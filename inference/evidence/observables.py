@@ -114,7 +114,7 @@ def preference_by_observable(loos: Mapping[str, Mapping[str, Any]],
                              data_hashes: Mapping[str, str | None] | None = None
                              ) -> dict[str, Any]:
     """Per observed site the contest of :func:`site_contest` (sites no model read are
-    left out), and ``all``: the evidence ranking ``evidence``
+    left out, their names under ``unread``), and ``all``: the evidence ranking ``evidence``
     (:func:`inference.evidence.ranking.rank_evidence`'s dict) as preferred law, runner-up
     and log Z gap +- error [nats]. ``data_hashes`` (model -> data hash), where given, must
     be one hash. JSON-ready."""
@@ -124,6 +124,7 @@ def preference_by_observable(loos: Mapping[str, Mapping[str, Any]],
     sites = [site_contest(loos, s, eligible=eligible, baselines=baselines)
              for s in OBSERVED_SITES]
     return {"observables": [s for s in sites if s["elpd"]],
+            "unread": [s["observable"] for s in sites if not s["elpd"]],
             "all": {"preferred": evidence.get("best"), "runner_up": evidence.get("runner_up"),
                     "delta_log_z": evidence.get("gap"),
                     "delta_log_z_err": evidence.get("gap_err"),

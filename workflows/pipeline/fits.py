@@ -170,12 +170,18 @@ def load_data(cfg: dict[str, Any]):
 class LawRun:
     """What the pipeline keeps of one fitted law (JSON-ready summary + its InferenceData);
     ``figure_data``: what the figures compute from the fit, when it was computed with the
-    fit (workflows.figures.numbers.law_figure_data; None: the figures compute it)."""
+    fit (workflows.figures.numbers.law_figure_data; None: the figures compute it);
+    ``loss_shift``: its rows of the loss-against-shift table and ``site_loos`` its
+    PSIS-LOO per observed site, both computed with the fit
+    (workflows.pipeline.outputs.law_loss_rows, inference.evidence.observables.site_loos;
+    None: not computed)."""
 
     name: str
     summary: dict[str, Any]
     idata: Any
     figure_data: dict[str, Any] | None = None
+    loss_shift: dict[str, Any] | None = None
+    site_loos: dict[str, Any] | None = None
 
 
 def _param_summary(idata: Any, truth: dict[str, Any] | None) -> list[dict[str, Any]]:

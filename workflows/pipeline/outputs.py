@@ -20,7 +20,8 @@ from beadrod.data.io import atomic_path, write_json, write_text
 from beadrod.workflows.config import shift_noise
 
 __all__ = ["data_block", "exclusions", "tension", "tension_jobs", "nuts_eta", "fit_checks",
-           "report_extras", "figures", "write_outputs"]
+           "law_loss_rows", "loss_shift", "observable_preference", "report_extras", "figures",
+           "write_outputs"]
 
 log = logging.getLogger("beadrod")
 
@@ -210,6 +211,98 @@ def _tension_block(runs, pair: tuple[str, str], inputs, cfg, rung: str, eta_q, e
     with atomic_path(out / "idata" / f"tension_eta_samples_{rung}.npz") as tmp:
         np.savez(tmp, shift=shift_draws, q=eta_q, joint=eta_joint)
     return block
+
+
+def law_loss_rows(run: Any, spec: Any, inputs: dict[str, Any], ds: Any
+                  ) -> dict[str, Any] | None:
+    """One fit's rows of the loss-against-shift table
+    (:func:`inference.evidence.loss_shift.model_row`), computed where the fit ran (a worker
+    process): ``exact``, its draws at its rung; ``paper``, the same draws at the paper's
+    rung (:func:`inference.model.numpyro_models.paper_spec`: Eq. 25 where the law has it,
+    else first order; the law-free baseline has no rung and one row). None where the
+    data have no usable amplitude ratio; a row that fails carries ``error``."""
+    from dataclasses import replace
+
+    from beadrod.inference.evidence.loss_shift import model_row, small_amplitude
+    from beadrod.inference.model.amplitude import loss_points
+    from beadrod.inference.model.numpyro_models import law_of, paper_spec
+
+    points = loss_points(ds)
+    if points.x.size == 0:
+        return None
+    x_small = small_amplitude(points.x)
+
+    def row(sp):
+        try:
+            return model_row(sp, run.idata, x_small, inputs)
+        except Exception as exc:  # noqa: BLE001 (one row: the table says why)
+            log.warning("%s: loss-against-shift row not computed (%s: %s)", run.name,
+                        type(exc).__name__, exc)
+            return {"error": f"{type(exc).__name__}: {exc}"}
+
+    exact = row(spec)
+    if law_of(spec) is None:
+        return {"exact": exact, "paper": exact}
+    try:
+        paper = replace(spec, rung=paper_spec(spec.law).rung)
+    except ValueError as exc:  # the law has no rung of the paper's
+        return {"exact": exact, "paper": {"error": str(exc)}}
+    return {"exact": exact, "paper": exact if paper.rung == spec.rung else row(paper)}
+
+
+def loss_shift(runs: dict[str, Any], ds: Any, done: dict[str, Any] | None = None
+               ) -> dict[str, Any] | None:
+    """The loss-against-shift table of result.json (docs/outputs.md): x_s, per reading
+    (``exact``: each fit at its rung; ``paper``: at the paper's rung, from the tension's
+    Eq. 25 fit of a law where the comparison ran one, ``done`` holding it under
+    'tension:NAME') each model's row, and the data's row
+    (:func:`inference.evidence.loss_shift.data_row`). None where no row was computed."""
+    from beadrod.inference.evidence.loss_shift import data_row, small_amplitude
+    from beadrod.inference.model.amplitude import loss_points
+
+    points = loss_points(ds)
+    rows = {k: r.loss_shift for k, r in runs.items() if r.loss_shift}
+    if points.x.size == 0 or not rows:
+        return None
+    x_small = small_amplitude(points.x)
+    paper: dict[str, Any] = {}
+    for name, r in rows.items():
+        fit = (done or {}).get(f"tension:{name}")
+        own = getattr(fit, "loss_shift", None)
+        paper[name] = ({**own["exact"], "source": "the tension's Eq. 25 fit"}
+                       if own and "error" not in own["exact"] else r["paper"])
+    return {"x_small": x_small, "exact": {k: r["exact"] for k, r in rows.items()},
+            "paper": paper, "data": data_row(points, x_small)}
+
+
+def observable_preference(runs: dict[str, Any], ds: Any) -> dict[str, Any] | None:
+    """The law each observable prefers by its elpd_loo, and all together by the evidence
+    (:func:`inference.evidence.observables.preference_by_observable`, from each run's
+    ``site_loos``, computed here where the fit did not): the laws that passed their gate
+    contest, the law-free baseline is ranked but never preferred; where no law passed,
+    every law contests and ``gate_ignored`` says so."""
+    from beadrod.inference.evidence.observables import preference_by_observable, site_loos
+    from beadrod.workflows.report.tables import is_baseline, is_failed, ranking
+
+    laws = [r.summary for r in runs.values()]
+    bases = [lw["name"] for lw in laws if is_baseline(lw)]
+    ok = [lw["name"] for lw in laws if not is_failed(lw)]
+    ignored = not any(n not in bases for n in ok)
+    if ignored:
+        laws = [{**lw, "status": "ok"} for lw in laws]
+        ok = [lw["name"] for lw in laws]
+    try:
+        loos = {k: r.site_loos if r.site_loos is not None else site_loos(r.idata)
+                for k, r in runs.items()}
+        out = preference_by_observable(
+            loos, ranking(laws), eligible=ok, baselines=bases,
+            data_hashes={k: r.summary.get("data_hash", getattr(ds, "data_hash", None))
+                         for k, r in runs.items()})
+    except Exception as exc:  # noqa: BLE001 (the report says it is missing, and why)
+        log.warning("preference by observable not computed (%s: %s)", type(exc).__name__, exc)
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    out["gate_ignored"] = ignored
+    return out
 
 
 def fit_checks(runs: dict[str, Any]) -> dict[str, Any]:

@@ -121,6 +121,13 @@ class _Jobs:
                           resume=resume, job=job.key)
             if job.cfg.get("report", {}).get("figures", False):
                 run.figure_data = _figure_data(run, job.spec, inputs, ds)
+            from beadrod.inference.evidence.observables import site_loos
+            from beadrod.workflows.pipeline.outputs import law_loss_rows
+
+            # the report's loss-against-shift rows and per-observable LOO, here where the
+            # fit ran (a worker process: they overlap the other fits)
+            run.loss_shift = law_loss_rows(run, job.spec, inputs, ds)
+            run.site_loos = site_loos(run.idata)
             return run
         t0 = time.perf_counter()
         if job.kind == "eta":
@@ -154,16 +161,17 @@ class _Jobs:
             _DATA[key] = (ds, model_inputs(ds))
         res = self.run(job, resume, *_DATA[key])
         # a LawRun's InferenceData travels through its netCDF file, not through the pipe
-        return (res.summary, res.figure_data) if job.kind == "fit" else res
+        return ((res.summary, res.figure_data, res.loss_shift, res.site_loos)
+                if job.kind == "fit" else res)
 
     def collect(self, job: Job, value: Any) -> Any:
         if job.kind != "fit":
             return value
         from beadrod.workflows.pipeline.idata_io import load_idata
 
-        summary, fig_data = value
+        summary, fig_data, loss_rows, loos = value
         return LawRun(job.name, summary, load_idata(Path(job.out) / "idata" / f"{job.name}.nc"),
-                      fig_data)
+                      fig_data, loss_rows, loos)
 
 
 JOBS = _Jobs()
@@ -307,7 +315,10 @@ def run_compare(cfg: dict[str, Any], out: Path, *, resume: bool = False,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "data": outputs.data_block(ds),
             "laws": laws, "preferred": pref, "preferred_reason": why,
-            "tension": tension, "config": cfg,
+            "tension": tension,
+            "loss_shift": outputs.loss_shift(runs, ds, finished),
+            "observables": outputs.observable_preference(runs, ds),
+            "config": cfg,
         }
         comp = Comparison(result, runs, inputs, ds, workers, timings,
                           time.perf_counter() - t_start)

@@ -10,7 +10,8 @@ Optional keys of the result may be missing; the report then says less.
 Order: the headline (the preferred law, or the baseline first when it beats every law),
 the evidence table, one warnings table (a row per law, a column per check a statistician
 would raise, each explained once below it), the preferred law's parameters, the truth of
-a synthetic world, the η tension, every law's parameters and priors, the data, the
+a synthetic world, the η tension, the loss against the shift and the law each observable
+prefers, every law's parameters and priors, the data, the
 sampler diagnostics, the figures, a glossary, timings and the configuration. Tables:
 :mod:`workflows.report.tables`, :mod:`workflows.report.checks`,
 :mod:`workflows.report.params`, :mod:`workflows.report.tension`; renderers:
@@ -30,6 +31,7 @@ from beadrod.workflows.report.checks import (
     warnings_notes,
     warnings_table,
 )
+from beadrod.workflows.report.loss_shift import loss_shift_blocks
 from beadrod.workflows.report.params import (
     GLOSSARY,
     glossary_table,
@@ -223,6 +225,7 @@ def report_blocks(result: Mapping) -> list[Block]:
         b.append(("table", *param_table(pref, truth)))
     b += _truth_blocks(result, laws)
     b += _tension_blocks(result)
+    b += loss_shift_blocks(result)
 
     b.append(("h", 2, "Parameters of every law"))
     gl = glossary_table(laws)
