@@ -21,7 +21,8 @@ The contract (docs/adding-a-law.md has an example):
   background exponent for this law; without it, beta is fitted), and
   ``loss_increment(x, *, ...)``, JAX-traceable, the loss Delta(1/Q) >= 0 it adds at the
   amplitude x = delta_a/delta0, with keyword arguments as ``force``'s. It is checked at
-  the prior medians for finite values >= 0 at x = 0 ... 2 and finite gradients there in
+  the prior medians for finite values >= 0 at x = 0 ... 2, zero at x = 0 (the linear
+  loss is the reference Q's), and finite gradients there in
   the law's parameters (and in x for x > 0): write a power of x with a double ``where``
   at x = 0. Every key of ``PRIORS`` is an argument of ``force`` or of ``loss_increment``.
 
@@ -364,6 +365,11 @@ def _check_loss_increment(path: Path, law: ContactLaw, scene: dict[str, float]) 
     if np.any(value < 0):
         raise _fail(path, f"negative loss_increment {where} (x: value {shown}); it is a loss "
                           "added to the linear one, Delta(1/Q) >= 0")
+    if _LOSS_X[0] == 0.0 and abs(value[0]) > 1e-12:
+        # a constant part would be a second linear loss, which the reference Q already
+        # measures: the two could not be told apart
+        raise _fail(path, f"loss_increment(0) = {value[0]:.4g} {where}: the increment must "
+                          "vanish at zero amplitude (the linear loss is the reference Q's)")
     for k, g in d_theta.items():
         bad = [a for a, ok in zip(_LOSS_X, np.isfinite(g)) if not ok]
         if bad:
