@@ -126,6 +126,26 @@ def test_simulated_and_prior_predictive_inputs(inputs):
     assert 0.5 * 0.022 < np.std(resid) < 2 * 0.022   # sqrt(0.02^2 + 0.01^2)
 
 
+def test_a_design_with_amplitude_ratios_simulates_them():
+    """design_inputs(amplitude_ratios=True): every sweep's ratio against a reference at
+    ref_amplitude, drawn by simulate (what the SBC and recovery designs fit)."""
+    from beadrod.inference.model.likelihood import design_inputs
+    from beadrod.models.scene import builtin_scene
+
+    des = design_inputs(builtin_scene("paper"), n_protocols=3,
+                        amplitudes=np.geomspace(3e-9, 40e-9, 4), amplitude_ratios=True)
+    model = build_model("hertz", rung="first_order")
+    truth = {"young": 200e9, "loss_exponent": 1.0, **COMMON}
+    sim, values = simulate(model, des, truth, seed=2)
+    assert np.shape(sim["amp_obs"]) == (3 * 2 * 4,)
+    assert np.all(np.isfinite(sim["amp_obs"]))
+    # (2 - beta) ln Omega with Omega falling: the ratio falls along each sweep
+    pred = np.asarray(values["amp_pred"]).reshape(3, 2, 4)
+    assert np.all(np.diff(pred, axis=-1) < 0)
+    assert "amp_obs" not in design_inputs(builtin_scene("paper"), n_protocols=1,
+                                          amplitudes=[1e-8])
+
+
 def test_a_sweep_without_voltage_is_left_out_of_the_ratios_only(tmp_path):
     from beadrod.data.load import dump_toml
     from beadrod.models import scene

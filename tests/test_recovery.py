@@ -1,11 +1,11 @@
 """Full parameter recovery and evidence ranking on synthetic data from each contact law
-(slow: ``pytest -m slow tests/test_recovery.py``; 49 NUTS fits, seven laws on seven
+(slow: ``pytest -m slow tests/test_recovery.py``; 64 NUTS fits, eight laws on eight
 datasets).
 
 For every contact law of the registry that the inference supports (``models.registry``
 laws that ``inference.model.numpyro_models`` builds and ``beadrod compare`` fits, and that
-have a truth below: hertz, powerlaw, viscoelastic, jkr, dmt, greenwood_williamson,
-maugis_dugdale) one
+have a truth below: hertz, powerlaw, viscoelastic, hertz_hysteretic, jkr, dmt,
+greenwood_williamson, maugis_dugdale) one
 dataset is simulated from that law, with the exact ModelSpec the comparison
 pipeline fits (``workflows.pipeline.fits.comparison_specs`` at the default rung of
 ``workflows.config.DEFAULTS``, the exact backbone for every law). Then
@@ -24,7 +24,9 @@ tests/test_evidence.py::test_evidence_ranks_the_generating_law_first.
 
 Design: 28 protocols, as many as the embedded ``paper_like`` data, each swept up and down at 8
 drive amplitudes 3-42 nm (geometric): x = delta_a/delta0 up to ~0.94 (Hertz), 0.8 (JKR),
-0.7 (power law, whose overlap at n = 2.2 is larger), and a reference Q on every protocol.
+0.7 (power law, whose overlap at n = 2.2 is larger), a reference Q on every protocol, and
+every sweep's amplitude per volt against a reference sweep at 0.3 nm (the amplitude
+ratios of inference.model.amplitude; laws with no Q of their own read Q = 45).
 
 Truths (noise levels as in the embedded data, data/README.md):
   E = 200 GPa; power law n = 2.2 (mid-prior, far from Hertz's 3/2) with
@@ -39,7 +41,12 @@ Truths (noise levels as in the embedded data, data/README.md):
   sigma_shift = 1e-3 (2 Hz frequency noise on two peaks at 2.7 kHz); offset_down = -2e-3;
   nuisance Q: mu_logq = log 45, tau_logq = 0.46 (Q log-uniform on [20, 100]);
   viscoelastic sigma_logq = 0.05 (the embedded data's Q measurement noise; in a
-  viscoelastic world Q_p is fixed by eta, E and f0_p, so only measurement noise remains).
+  viscoelastic world Q_p is fixed by eta, E and f0_p, so only measurement noise remains);
+  the shift's growing part kappa_shift = 0.05 and shared offset tau_shift = 5e-4; the
+  amplitude ratios' sigma_amp = tau_amp = 0.01 and offset_amp_down = 0; the background
+  loss exponent 1 (a constant dashpot) for laws with no loss of their own; Hertz with
+  hysteresis strength h = 0.03 and m = 2 (a hysteretic share of the shift of 0.015 at
+  x = 0.5).
 
 Coverage criterion. A law has k = 6 to 8 latent parameters; each central 90 % interval
 misses its truth with probability 0.1 even for an exact posterior, so "all k cover"
@@ -131,17 +138,26 @@ SCENE = builtin_scene("paper")  # mass, load, radius, bead and rod materials
 N_PROTOCOLS = 28
 AMPLITUDES = np.geomspace(3e-9, 42e-9, 8)
 
-_COMMON = {"delta0_scatter": 0.1, "sigma_shift": 1e-3, "offset_down": -2e-3}
+# the shift's protocol noise (floor, growing part, shared offset) and the amplitude
+# ratios' (1 % per sweep and per reference, as the embedded worlds' instruments)
+_COMMON = {"delta0_scatter": 0.1, "sigma_shift": 1e-3, "kappa_shift": 0.05,
+           "tau_shift": 5e-4, "offset_down": -2e-3,
+           "sigma_amp": 0.01, "tau_amp": 0.01, "offset_amp_down": 0.0}
 _Q_NUISANCE = {"mu_logq": float(np.log(45.0)), "tau_logq": 0.46}
+_BACKGROUND = {"loss_exponent": 1.0}  # a constant dashpot, for laws with no loss of their own
 TRUTHS: dict[str, dict[str, float]] = {
-    "hertz": {"young": 200e9, **_COMMON, **_Q_NUISANCE},
-    "powerlaw": {"n": 2.2, "delta0_ref_log": float(np.log(72e-9)), **_COMMON, **_Q_NUISANCE},
+    "hertz": {"young": 200e9, **_COMMON, **_Q_NUISANCE, **_BACKGROUND},
+    "powerlaw": {"n": 2.2, "delta0_ref_log": float(np.log(72e-9)), **_COMMON, **_Q_NUISANCE,
+                 **_BACKGROUND},
     "viscoelastic": {"young": 200e9, "eta": 1.5e5, "sigma_logq": 0.05, **_COMMON},
-    "jkr": {"young": 200e9, "gamma": 0.7, **_COMMON, **_Q_NUISANCE},
-    "dmt": {"young": 200e9, "gamma": 0.7, **_COMMON, **_Q_NUISANCE},
+    "hertz_hysteretic": {"young": 200e9, "strength": 0.03, "exponent": 2.0, **_COMMON,
+                         **_Q_NUISANCE, **_BACKGROUND},
+    "jkr": {"young": 200e9, "gamma": 0.7, **_COMMON, **_Q_NUISANCE, **_BACKGROUND},
+    "dmt": {"young": 200e9, "gamma": 0.7, **_COMMON, **_Q_NUISANCE, **_BACKGROUND},
     "greenwood_williamson": {"young": 200e9, "roughness_factor": 1.0, **_COMMON,
-                             **_Q_NUISANCE},
-    "maugis_dugdale": {"young": 200e9, "gamma": 0.7, "lam": 1.0, **_COMMON, **_Q_NUISANCE},
+                             **_Q_NUISANCE, **_BACKGROUND},
+    "maugis_dugdale": {"young": 200e9, "gamma": 0.7, "lam": 1.0, **_COMMON, **_Q_NUISANCE,
+                       **_BACKGROUND},
 }
 # the registry's laws that the inference builds and the comparison loop fits
 LAWS = tuple(name for name in registry.law_names()
@@ -149,7 +165,7 @@ LAWS = tuple(name for name in registry.law_names()
 SPECS = comparison_specs(list(LAWS), DEFAULTS["rung"], "normal")
 
 DATA_SEEDS = {"hertz": 10, "powerlaw": 11, "viscoelastic": 12, "jkr": 13, "dmt": 14,
-              "greenwood_williamson": 15, "maugis_dugdale": 16}
+              "greenwood_williamson": 15, "maugis_dugdale": 16, "hertz_hysteretic": 17}
 _S = DEFAULTS["sampling"]
 NUTS = {"num_warmup": _S["warmup"], "num_samples": _S["samples"], "num_chains": _S["chains"],
         "target_accept": _S["target_accept"], "seed": 0, "predictive": False}
@@ -158,6 +174,7 @@ NUTS = {"num_warmup": _S["warmup"], "num_samples": _S["samples"], "num_chains": 
 # DMT are Maugis-Dugdale's lam -> inf and lam -> 0 limits, which its prior's ends 100 and
 # 0.1 approach; on Maugis-Dugdale data the three tie: module docstring)
 NESTED = {("hertz", "powerlaw"), ("hertz", "viscoelastic"), ("hertz", "greenwood_williamson"),
+          ("hertz", "hertz_hysteretic"),  # zero strength is Hertz exactly
           ("jkr", "maugis_dugdale"), ("dmt", "maugis_dugdale"),
           ("maugis_dugdale", "jkr"), ("maugis_dugdale", "dmt")}
 MAX_MISSES_90 = 2
@@ -179,7 +196,7 @@ class _Fits:
 
     def __init__(self) -> None:
         self.design = design_inputs(SCENE, n_protocols=N_PROTOCOLS, amplitudes=AMPLITUDES,
-                                    q_every=1)
+                                    q_every=1, amplitude_ratios=True)
         self._data: dict[str, tuple[dict, dict]] = {}
         self._fits: dict[tuple[str, str], Fit] = {}
 
@@ -217,12 +234,13 @@ def test_every_supported_law_has_a_truth():
     # is the one-eta law's (eta_shift = eta_q) and which adds no recovery check of its own
     assert set(registry.law_names()) - set(LAWS) == {"viscoelastic_split"}
     assert set(TRUTHS) == set(LAWS) == set(DATA_SEEDS)
-    des = design_inputs(SCENE, n_protocols=2, amplitudes=AMPLITUDES[:2])
+    des = design_inputs(SCENE, n_protocols=2, amplitudes=AMPLITUDES[:2],
+                        amplitude_ratios=True)
     for law in LAWS:
         tr = handlers.trace(handlers.seed(build_model(SPECS[law]), jax.random.PRNGKey(0)))
         sites = tr.get_trace(des)
         latent = {k for k, s in sites.items() if s["type"] == "sample" and not s["is_observed"]
-                  and k not in ("f0_obs", "shift_obs", "q_obs")}
+                  and k not in ("f0_obs", "shift_obs", "q_obs", "amp_obs")}
         # a parameter with a sampler scale is sampled at its own site (models.law)
         assert latent == set(registry.get_law(law).sampler_values(TRUTHS[law])), (law, latent)
 

@@ -1,4 +1,5 @@
-"""Simulation-based calibration of the viscoelastic model; its ECDF band and files."""
+"""Simulation-based calibration of the viscoelastic model and of Hertz with hysteresis;
+its ECDF band and files."""
 
 import json
 import math
@@ -68,13 +69,24 @@ def test_dkw_band_matches_massart_bound_and_covers_uniform_ranks():
     assert np.max(diff["a"]) > eps
 
 
-def _full_sbc(n_replicates: int = 100) -> SBCResult:
+def _full_sbc(n_replicates: int = 100, spec: ModelSpec = SPEC,
+              params: tuple[str, ...] = ("eta", "young", "delta0_scatter", "sigma_shift"),
+              **design: object) -> SBCResult:
     import jax
 
     jax.config.update("jax_enable_x64", True)  # a fresh process: conftest did not run
-    des = design_inputs(SCENE, n_protocols=4, amplitudes=np.linspace(8e-9, 40e-9, 4))
-    return run_sbc(SPEC, des, n_replicates=n_replicates, num_warmup=300, num_samples=100,
-                   thin=3, seed=1, params=("eta", "young", "delta0_scatter", "sigma_shift"))
+    des = design_inputs(SCENE, n_protocols=4, amplitudes=np.linspace(8e-9, 40e-9, 4),
+                        **design)
+    return run_sbc(spec, des, n_replicates=n_replicates, num_warmup=300, num_samples=100,
+                   thin=3, seed=1, params=params)
+
+
+def _in_own_process(*args: object, **kwargs: object) -> SBCResult:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(_full_sbc, *args, **kwargs).result(timeout=3000)
 
 
 @pytest.mark.slow
@@ -83,12 +95,22 @@ def test_sbc_full_viscoelastic_ranks_uniform(tmp_path):
     # XLA crashed (segfault or abort in deserialize_executable, at the first replicate)
     # when it ran late in a long pytest worker; run alone it passed against the same
     # cache. The cause is not established (README); a fresh process lacks the history.
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-        res = pool.submit(_full_sbc).result(timeout=3000)
+    res = _in_own_process()
     out_dir = Path(os.environ.get("BEADROD_ARTIFACTS", tmp_path))
     plot_ecdf(res, out_dir / "sbc_viscoelastic.png")
     # 4 tests: Bonferroni at 1 %
     assert res.min_pvalue() > 0.01 / 4, res.pvalues
+
+
+@pytest.mark.slow
+def test_sbc_hertz_hysteretic_ranks_uniform(tmp_path):
+    """The hysteretic law's strength and exponent, read from the shift and the amplitude
+    ratios together (design with amplitude_ratios), calibrated at the first-order rung."""
+    spec = ModelSpec("hertz_hysteretic", rung="first_order")
+    params = ("strength", "exponent", "young", "loss_exponent", "sigma_amp")
+    res = _in_own_process(100, spec, params, amplitude_ratios=True)
+    out_dir = Path(os.environ.get("BEADROD_ARTIFACTS", tmp_path))
+    plot_ecdf(res, out_dir / "sbc_hertz_hysteretic.png")
+    print({k: round(v, 4) for k, v in res.pvalues.items()}, "divergences",
+          int(np.sum(res.divergences)))
+    assert res.min_pvalue() > 0.01 / len(params), res.pvalues  # Bonferroni at 1 %

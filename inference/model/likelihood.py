@@ -166,10 +166,17 @@ def observe_logq(log_q_pred: jnp.ndarray, sigma: jnp.ndarray, obs: jnp.ndarray |
 
 
 def design_inputs(scene: Any, *, n_protocols: int, amplitudes: Any,
-                  directions: tuple[int, ...] = (0, 1), q_every: int = 1) -> dict[str, Any]:
+                  directions: tuple[int, ...] = (0, 1), q_every: int = 1,
+                  amplitude_ratios: bool = False, ref_amplitude: float = 0.3e-9,
+                  q_plugin: float = 45.0) -> dict[str, Any]:
     """An experiment design without observations: every protocol is swept at the
     drive amplitudes ``amplitudes`` [m] in each of ``directions``; Q is observed on
     every ``q_every``-th protocol. Fill the observations with :func:`simulate`.
+
+    ``amplitude_ratios``: every sweep also reads its amplitude per volt against the
+    protocol's reference sweep at ``ref_amplitude`` [m] (inference.model.amplitude), with
+    the linear Q ``q_plugin`` [-] standing for the measured reference Q of laws that
+    predict none.
     """
     amps = np.asarray(amplitudes, float)
     proto, direc, amp = [], [], []
@@ -179,7 +186,13 @@ def design_inputs(scene: Any, *, n_protocols: int, amplitudes: Any,
             direc += [d] * len(amps)
             amp += list(amps)
     q_idx = np.arange(0, n_protocols, q_every)
+    ratios = {} if not amplitude_ratios else {
+        "amp_obs": None, "amp_idx": jnp.arange(len(proto), dtype=jnp.int32),
+        "amp_proto": jnp.asarray(proto, dtype=jnp.int32),
+        "ref_amplitude": jnp.full(n_protocols, float(ref_amplitude)),
+        "q_plugin": jnp.full(n_protocols, float(q_plugin))}
     return {
+        **ratios,
         "f0": None, "q_obs": None, "shift": None, "n_protocols": int(n_protocols),
         "q_idx": jnp.asarray(q_idx, dtype=jnp.int32),
         "proto": jnp.asarray(proto, dtype=jnp.int32),
@@ -197,7 +210,7 @@ def simulate(model: Any, design: dict[str, Any], truth: dict[str, Any],
              seed: int = 0) -> tuple[dict[str, Any], dict[str, Any]]:
     """Observations drawn from ``model`` with its latent sites fixed at ``truth``
     (sites not in ``truth`` are drawn from their priors); returns the model inputs
-    with ``f0``, ``shift`` and ``q_obs`` filled, and the values of every sample and
+    with ``f0``, ``shift``, ``q_obs`` and ``amp_obs`` filled, and the values of every sample and
     deterministic site of the simulating trace (the truth, delta0 included).
     """
     import jax
