@@ -251,3 +251,54 @@ def test_records_are_whole_json(tmp_path):
     assert results.read_record(tmp_path, "sbc-hertz-0000")["key"] == "k"
     path.write_text("{torn")
     assert results.read_record(tmp_path, "sbc-hertz-0000") is None
+
+
+def _law(name, log_z, status="ok", young=(1.9e11, 2.1e11)):
+    return {"name": name, "status": status, "log_z": log_z, "log_z_err": 0.1,
+            "params": [{"name": "young", "unit": "Pa", "mean": sum(young) / 2, "sd": 1e9,
+                        "q05": young[0], "q95": young[1]}]}
+
+
+def test_comparison_summaries_from_records(tmp_path):
+    from beadrod.workflows.campaign.summary import write_summary
+    from beadrod.workflows.campaign.tasks import Task
+
+    rec = lambda pref, laws, truth=None: {"status": DONE, "preferred": pref, "laws": laws,
+                                          "truth": truth or {}}
+    tasks = [Task("recovery", f"r{i}", {"world": "hertz_dynamics", "world_seed": i,
+                                        "law": "hertz"}, "k") for i in range(3)]
+    records = {"r0": rec("hertz", [_law("hertz", 10.0), _law("jkr", 8.0)], {"young": 2e11}),
+               "r1": rec("jkr", [_law("hertz", 7.0), _law("jkr", 8.0)], {"young": 2.5e11}),
+               "r2": {"status": FAILED, "error": "ValueError: boom"}}
+    write_summary("recovery", tasks, records, tmp_path)
+    md = (tmp_path / "summary.md").read_text()
+    assert "| hertz | 1 | 1 |" in md  # generating hertz: preferred hertz once, jkr once
+    assert "| hertz.young | 2 | 1 (50%) |" in md
+    assert "median 0.50, min -1.00, max 2.00" in md and "FAILED 1" in md
+    assert (tmp_path / "figures" / "recovery_delta_log_z.png").exists()
+
+    out = tmp_path / "ds"
+    tasks = [Task("datasets", f"d{i}", {"dataset": f"bead{i}"}, "k") for i in range(3)]
+    records = {f"d{i}": rec(p, [_law("hertz", 1.0), _law("jkr", 2.0, "failed")])
+               for i, p in enumerate(["hertz", "hertz", "jkr"])}
+    write_summary("datasets", tasks, records, out)
+    md = (out / "summary.md").read_text()
+    assert "Majority preferred law: **hertz** (2 of 3)" in md
+    assert "| bead2 | 1.00 | 2.00 (gate) | jkr | **yes** |" in md
+    assert (out / "figures" / "forest_hertz.png").exists()
+    assert len((out / "campaign.csv").read_text().splitlines()) == 1 + 3 * 2
+
+
+def test_a_recovery_grid_is_checked(tmp_path):
+    from beadrod.workflows.campaign.recovery import read_grid
+    from beadrod.workflows.runtime import UserError
+
+    good = tmp_path / "g.toml"
+    good.write_text('laws = ["hertz", "baseline"]\n[[world]]\nworld = "hertz_dynamics"\n'
+                    'law = "hertz"\nseeds = [3, 1, 3]\n')
+    assert read_grid(good) == {"laws": ["hertz", "baseline"], "worlds": [
+        {"world": "hertz_dynamics", "law": "hertz", "seeds": [1, 3]}]}
+    bad = tmp_path / "b.toml"
+    bad.write_text('[[world]]\nworld = "mars"\nlaw = "hertz"\nseeds = [1]\n')
+    with pytest.raises(UserError, match="entry 1: world = 'mars'"):
+        read_grid(bad)

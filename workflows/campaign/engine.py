@@ -144,7 +144,14 @@ def open_client(*, workers: int, scheduler: str | None = None, retries: int = 2,
                 silence_logs=logging.ERROR))
             client = stack.enter_context(Client(cluster))
         else:
-            client = stack.enter_context(Client(scheduler, timeout="30s"))
+            try:
+                client = stack.enter_context(Client(scheduler, timeout="30s"))
+            except (OSError, ValueError) as exc:  # refused, timed out, a malformed address
+                from beadrod.workflows.runtime import UserError
+
+                raise UserError(f"cannot reach the Dask scheduler at {scheduler} ({exc}): "
+                                "start it with `dask scheduler` (docs/campaigns.md), or "
+                                "leave --scheduler out to run on this machine") from None
         client.register_plugin(BeadrodWorker(cache), name=BeadrodWorker.name)
         yield client
 

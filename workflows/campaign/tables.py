@@ -39,12 +39,12 @@ def status_lines(tasks: list[Task], records: dict[str, dict[str, Any]]) -> list[
     """Markdown lines: the task counts, each FAILED task with its error, the tasks not
     run (a campaign stopped before its end)."""
     missing = [t.name for t in tasks if t.name not in records]
-    failed = [r for r in records.values() if r.get("status") == FAILED]
+    failed = [(n, r) for n, r in records.items() if r.get("status") == FAILED]
     lines = [f"- tasks: {len(tasks)}; done {sum(r.get('status') == DONE for r in records.values())}"
              f", FAILED {len(failed)}, not run {len(missing)}"]
     if failed:
         lines += ["", "FAILED tasks (their records in `tasks/` hold the traceback):", ""]
-        lines += [f"- `{r['name']}`: {r.get('error', '?')}" for r in failed]
+        lines += [f"- `{n}`: {r.get('error', '?')}" for n, r in failed]
     if missing:
         lines += ["", "Not run (the campaign was stopped; rerun the command to finish): "
                   + ", ".join(f"`{n}`" for n in missing[:20])
