@@ -37,3 +37,13 @@ def test_bench_physics_writes_tables(tmp_path, tiny):
     assert float(jax_val["max_rel_error"]) < 1e-13
     assert float(by["jax closed form, clipped x in (1, 1.5], value"]["max_rel_error"]) < 1e-13
     assert "gradients finite at all 64 points (x = 1 included): True" in text
+
+
+def test_inference_bench_step_cost_is_a_median_with_its_spread():
+    """One busy round moves neither the step cost nor hides: the median stays, the
+    spread says (max - min)/median."""
+    from beadrod.workflows.bench.inference import step_time_summary
+
+    med, spread = step_time_summary([1.0, 1.02, 0.98, 1.01, 3.0, 0.99, 1.0])
+    assert med == 1.0
+    assert spread == pytest.approx(2.02)

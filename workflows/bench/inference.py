@@ -8,9 +8,11 @@ with its wall time. Because a fast law's sampling can take less time than the no
 compile probe, sampling is also measured without the probe: ESS per second of sampling
 work, the draws' leapfrog steps times the cost of one step inside NUTS, timed on a
 compiled one-chain loop of post-warmup draws (:func:`inference.sampling.sample.draw_program`),
-every model's loop timed in turns after all the fits (best of three rounds), so that the
-machine's drift over the run does not enter the ratios; the laws are compared with Hertz
-both ways.
+every model's loop timed in turns after all the fits, the median of seven interleaved
+rounds with its spread ((max - min)/median, column ``step_spread``), so that neither the
+machine's drift over the run nor one busy moment enters the ratios; the laws are compared
+with Hertz both ways. NUTS runs with fixed seeds, so its ESS and step counts repeat from
+run to run and only the step costs vary.
 
 The baseline is what a physicist would write without this project: the same
 Hertz posterior (first-order shift, per-protocol overlap conditioned on the
@@ -32,10 +34,11 @@ import numpy as np
 
 from beadrod.data.io import write_text
 
-__all__ = ["run", "baseline_log_density", "timed_nuts", "results_markdown"]
+__all__ = ["run", "baseline_log_density", "timed_nuts", "results_markdown",
+           "step_time_summary"]
 
 _G = 9.80665
-_ROUNDS = 3   # rounds of the step-cost loops, every model once a round
+_ROUNDS = 7   # rounds of the step-cost loops, every model once a round (median, spread)
 
 
 def _paper_eq23(x: float) -> float:
@@ -123,6 +126,14 @@ def timed_nuts(model, inputs: dict[str, Any], chains: int, warm: int, draws: int
     return fit, t["compile_s"], sampling, ess
 
 
+def step_time_summary(times: list[float]) -> tuple[float, float]:
+    """(median, relative spread) of one loop's times over the interleaved rounds: the
+    spread is (max - min) / median, so a round that caught the machine busy shows."""
+    t = np.asarray(times, float)
+    med = float(np.median(t))
+    return med, float((t.max() - t.min()) / med)
+
+
 def _run_emcee(d, n_walkers: int, n_steps: int, seed: int):
     import emcee
 
@@ -161,7 +172,8 @@ def _ratios(rows: list[dict[str, Any]], specs: dict[str, Any]) -> str:
         mark = lambda v: "below 1/3" if v < 1 / 3 else "ok"
         lines.append(f"- {r['model']}: sampling alone **{a:.2f}** ({mark(a)}), with "
                      f"compilation **{b:.2f}** ({mark(b)}); {r['us_per_step']:.1f} us "
-                     f"per step against {ref['us_per_step']:.1f}, "
+                     f"per step (spread {r.get('step_spread', float('nan')):.0%}) against "
+                     f"{ref['us_per_step']:.1f} ({ref.get('step_spread', float('nan')):.0%}), "
                      f"{r['gradients_per_draw']:.1f} steps per draw against "
                      f"{ref['gradients_per_draw']:.1f}")
     return "\n".join(lines)
@@ -254,18 +266,20 @@ def run(out_dir: Path, quick: bool = False) -> Path:
                      "log_z_bridge": br.log_z if br else None,
                      "err_bridge": br.log_z_err if br else None,
                      "bridge_s": br.wall_s if br else None})
-    # the step costs timed in turns, every model's loop once a round, best of ROUNDS:
-    # timed right after each fit, minutes apart, they would take the machine's drift
-    # with them
-    best = {k: float("inf") for k in loops}
+    # the step costs timed in turns, every model's loop once a round, the median of
+    # ROUNDS: timed right after each fit, minutes apart, they would take the machine's
+    # drift with them; a best-of kept one lucky round
+    times: dict[str, list[float]] = {k: [] for k in loops}
     for _ in range(_ROUNDS):
         for k, (run_loop, _) in loops.items():
-            best[k] = min(best[k], run_loop())
+            times[k].append(run_loop())
     for r in rows:
         if r["model"] in loops:
-            step_s = best[r["model"]] / (draws // 2) / loops[r["model"]][1]
+            med, spread = step_time_summary(times[r["model"]])
+            step_s = med / (draws // 2) / loops[r["model"]][1]
             grads = r["gradients_per_draw"] * chains * draws
             r["us_per_step"] = 1e6 * step_s
+            r["step_spread"] = spread
             r["ess_per_step_s"] = r["min_bulk_ess"] / (grads * step_s)
     # the baseline, on the same posterior as hertz_first_order
     d = _numpy_inputs(inputs)
