@@ -36,7 +36,7 @@ import pandas as pd
 from beadrod.data.rounding import significant
 
 __all__ = ["WORLDS", "DEFAULT_SEED", "generate", "write_world", "world_names",
-           "world_parameters", "WorldParameterError"]
+           "world_parameters", "check_overrides", "WorldParameterError"]
 
 DEFAULT_SEED = 441
 """Seed of the embedded folders (the paper's volume, J. Sound Vib. 441)."""
@@ -401,6 +401,15 @@ def _checked(world: str, overrides: dict[str, Any]) -> dict[str, Any]:
             f"world {world!r}: n_tripping ({merged['n_tripping']}) exceeds n_protocols "
             f"({merged['n_protocols']})")
     return out
+
+
+def check_overrides(world: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """``overrides`` of ``world``'s parameters checked as :func:`generate` checks them,
+    without making the world: the values as the world takes them (integers for counts,
+    floats otherwise), or :class:`WorldParameterError` naming the world and parameter."""
+    if world not in WORLDS:
+        raise WorldParameterError(f"unknown world {world!r}; known: {', '.join(WORLDS)}")
+    return _checked(world, dict(overrides))
 
 
 def generate(

@@ -31,7 +31,7 @@ import pandas as pd
 
 from beadrod.data.rounding import significant
 
-__all__ = ["HYSTERETIC", "hysteretic"]
+__all__ = ["HYSTERETIC", "LAW_PARAMETERS", "hysteretic"]
 
 HYSTERETIC = {
     "n_protocols": 20,
@@ -48,6 +48,27 @@ HYSTERETIC = {
     "noise_amplitude_rel": 0.01,
     "noise_q_rel": 0.05,
 }
+
+LAW_PARAMETERS = {
+    "strength": ("strength", "the hysteretic frequency drop h at x = 1, the world's "
+                             "strength"),
+    "exponent": ("exponent", "the Masing loop's exponent m, the world's exponent"),
+}
+"""Which parameters of the generating law (models.laws.hertz_hysteretic) the world's
+parameters are: law parameter -> (world parameter, what it is). Written into truth.json
+as ``law_parameters`` (the law's name and, per parameter, the value the world was made
+with, its overrides included), which workflows.report.truth.world_truth reads as the
+world's truths. The background exponent beta is no law parameter's truth: Hertz with
+hysteresis fixes its own background loss, and a law without a loss of its own would fit
+beta to the hysteretic loss as well."""
+
+
+def _law_parameters(cfg: dict) -> dict:
+    from beadrod.models.laws import hertz_hysteretic
+
+    return {"law": hertz_hysteretic.LAW.name,
+            "values": {name: {"value": float(cfg[key]), "world_parameter": key, "note": note}
+                       for name, (key, note) in LAW_PARAMETERS.items()}}
 
 
 def hysteretic(seed: int, scene: Any, scene_dict: dict,
@@ -143,6 +164,7 @@ def hysteretic(seed: int, scene: Any, scene_dict: dict,
         "model": "models.laws.hertz_hysteretic (Hertz backbone + Masing element) with a "
                  "background loss L0 Omega^beta, peaks at x = E Omega^2 / L(x)",
         "parameters": {**cfg, "displacement_per_volt_m_V": d_per_v},
+        "law_parameters": _law_parameters(cfg),
         "protocols": protocols,
         "observables": {
             "note": "noiseless values: f0 (f0_reference_Hz) and q_ref (q_reference) per "

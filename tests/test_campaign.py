@@ -297,7 +297,7 @@ def test_a_recovery_grid_is_checked(tmp_path):
     good.write_text('laws = ["hertz", "baseline"]\n[[world]]\nworld = "hertz_dynamics"\n'
                     'law = "hertz"\nseeds = [3, 1, 3]\n')
     assert read_grid(good) == {"laws": ["hertz", "baseline"], "worlds": [
-        {"world": "hertz_dynamics", "law": "hertz", "seeds": [1, 3]}]}
+        {"world": "hertz_dynamics", "law": "hertz", "seeds": [1, 3], "overrides": {}}]}
     bad = tmp_path / "b.toml"
     bad.write_text('[[world]]\nworld = "mars"\nlaw = "hertz"\nseeds = [1]\n')
     with pytest.raises(UserError, match="entry 1: world = 'mars'"):

@@ -39,7 +39,7 @@ def _law_row(r: dict[str, Any]) -> dict[str, Any]:
 
 def run_compare_task(kind: str, inputs: dict[str, Any]) -> dict[str, Any]:
     """The comparison of one dataset (``kind`` "datasets": inputs dataset, files, cfg) or
-    one world (``kind`` "recovery": inputs world, law, world_seed, cfg)."""
+    one world (``kind`` "recovery": inputs world, law, world_seed, overrides, cfg)."""
     from beadrod.workflows import runtime
     from beadrod.workflows.commands.compare import run
 
@@ -52,7 +52,8 @@ def run_compare_task(kind: str, inputs: dict[str, Any]) -> dict[str, Any]:
         else:
             from beadrod.data.synth import write_world
 
-            write_world(inputs["world"], data, seed=int(inputs["world_seed"]))
+            write_world(inputs["world"], data, seed=int(inputs["world_seed"]),
+                        overrides=inputs.get("overrides") or None)
         cfg = dict(inputs["cfg"])
         cfg["data"] = str(data)
         out = Path(tmp) / "out"

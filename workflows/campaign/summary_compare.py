@@ -25,7 +25,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from beadrod.workflows.campaign.execute import DONE  # noqa: E402
-from beadrod.workflows.campaign.tasks import Task  # noqa: E402
+from beadrod.workflows.campaign.tasks import Task, point_label  # noqa: E402
 
 __all__ = ["write", "law_rows", "delta_log_z"]
 
@@ -39,6 +39,7 @@ def law_rows(task: Task, rec: dict[str, Any] | None) -> list[dict[str, Any]]:
     base = {"task": task.name, "status": rec.get("status") if rec else "not run"}
     if task.kind == "recovery":
         base.update({"world": task.inputs["world"], "world_seed": task.inputs["world_seed"],
+                     "overrides": point_label(task.inputs.get("overrides") or {}),
                      "generating_law": task.inputs["law"]})
     else:
         base["dataset"] = task.inputs["dataset"]

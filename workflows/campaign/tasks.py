@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["Task", "task_key", "campaign_code", "sbc_tasks", "dataset_tasks",
-           "recovery_tasks", "SBC_DESIGN", "KINDS"]
+           "recovery_tasks", "point_label", "SBC_DESIGN", "KINDS"]
 
 KINDS = ("sbc", "recovery", "datasets")
 
@@ -157,10 +157,21 @@ def _fit_cfg(cfg: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def point_label(overrides: dict[str, Any]) -> str:
+    """An override point as text, for a task's name and the CSV: ``key=value`` joined by
+    '-' in key order, a range as ``low_high``; '' for none."""
+    def fmt(v: Any) -> str:
+        return "_".join(fmt(x) for x in v) if isinstance(v, list | tuple) else f"{v:g}"
+
+    return "-".join(f"{k}={fmt(v)}" for k, v in sorted(overrides.items()))
+
+
 def recovery_tasks(worlds: list[dict[str, Any]], cfg: dict[str, Any]) -> list[Task]:
-    """One comparison per (world, seed) of a recovery grid: ``worlds`` are the grid's
-    entries (world, law, seeds; workflows.campaign.recovery.read_grid), each world made by
-    data.synth.write_world as ``beadrod simulate`` makes it, in the worker."""
+    """One comparison per (world, override point, seed) of a recovery grid: ``worlds``
+    are the grid's items (world, law, seeds, overrides;
+    workflows.campaign.recovery.read_grid), each world made by data.synth.write_world as
+    ``beadrod simulate --set`` makes it, in the worker. The overrides are part of the
+    task's inputs, so of its key and its name."""
     from beadrod import data
 
     h = hashlib.sha256()  # the worlds are made by the data package's code
@@ -168,10 +179,12 @@ def recovery_tasks(worlds: list[dict[str, Any]], cfg: dict[str, Any]) -> list[Ta
         h.update(f.name.encode() + f.read_bytes())
     tasks = []
     for w in worlds:
+        overrides = dict(w.get("overrides") or {})
+        label = point_label(overrides)
         for s in w["seeds"]:
             inputs = {"world": w["world"], "law": w["law"], "world_seed": int(s),
-                      "cfg": _fit_cfg(cfg)}
-            name = f"recovery-{w['world']}-{int(s)}"
+                      "overrides": overrides, "cfg": _fit_cfg(cfg)}
+            name = "-".join(["recovery", w["world"], *([label] if label else []), str(int(s))])
             tasks.append(Task("recovery", name, inputs,
                               task_key("recovery", inputs, h.hexdigest())))
     return tasks

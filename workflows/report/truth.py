@@ -6,7 +6,10 @@ not computed from a modulus), ``hertz_dynamics`` has a linear dashpot, not a vis
 :func:`world_truth` gives, per parameter, either a value with a note on what it means,
 or one line saying why the world defines none. :func:`protocol_truth` compares the
 per-protocol truths (static overlap delta0_p [m], linear resonance f0_p [Hz], linear
-Q_p) with the data and with each fit.
+Q_p) with the data and with each fit. A world whose parameters are a law's (the
+``hysteretic`` world's strength and exponent are Hertz with hysteresis's) says so in its
+truth.json (``law_parameters``, written by the world's own module), and those truths are
+taken as they stand, with any override the world was made with.
 
 Sample values over the world's protocols stand in for hyper-parameters that the world
 does not draw from the model's distribution (it draws f0 uniform, the models
@@ -84,6 +87,26 @@ def _protocol_values(truth: Mapping, key: str) -> np.ndarray | None:
     return np.asarray(vals, float)
 
 
+def _law_parameters(truth: Mapping) -> dict[str, dict[str, Any]]:
+    """The truths a world states for a law's parameters (truth.json ``law_parameters``:
+    ``law`` and ``values``, parameter -> {value, world_parameter, note}; written by the
+    world's own module, e.g. data.worlds_loss.LAW_PARAMETERS). Entries without a finite
+    number are skipped."""
+    lp = truth.get("law_parameters")
+    if not isinstance(lp, Mapping) or not isinstance(lp.get("values"), Mapping):
+        return {}
+    out = {}
+    for name, v in lp["values"].items():
+        value = v.get("value") if isinstance(v, Mapping) else None
+        if isinstance(value, int | float) and not isinstance(value, bool) \
+                and np.isfinite(value):
+            src = v.get("world_parameter", name)
+            note = str(v.get("note") or f"the world's {src}")
+            out[str(name)] = {"value": float(value), "law": lp.get("law"),
+                              "note": f"{note} ({lp.get('law', 'the law')}'s {name})"}
+    return out
+
+
 def world_truth(truth: Mapping | None) -> dict[str, Any] | None:
     """Per-parameter truths of a synthetic world (None for measured data).
 
@@ -127,6 +150,7 @@ def world_truth(truth: Mapping | None) -> dict[str, Any] | None:
                              "note": "sample mean of ln Q_p (Q_p drawn log-uniform)"}
         values["tau_logq"] = {"value": float(np.std(np.log(q), ddof=1)),
                               "note": "sample sd of ln Q_p"}
+    values.update(_law_parameters(truth))
     none = {k: v for k, v in _NOTES.get(world, {}).items() if k not in values}
     return {"world": world, "kind": truth.get("kind"), "seed": truth.get("seed"),
             "values": values, "none": none}
