@@ -112,6 +112,13 @@ def test_a_changed_input_gives_a_new_key():
     assert a[0].key != a[1].key and a[0].key != b[0].key
     c = sbc_tasks("hertz", 1, rung="first_order", sampling={**SAMPLING, "warmup": 21}, seed=0)
     assert c[0].key != a[0].key
+    from beadrod.workflows.campaign.tasks import SBC_DESIGN, sbc_design_inputs
+
+    ratios = dict(SBC_DESIGN, amplitude_ratios=True)  # --amplitude-ratios
+    assert "amp_idx" in sbc_design_inputs(ratios) and "amp_idx" not in sbc_design_inputs(
+        SBC_DESIGN)
+    d = sbc_tasks("hertz", 1, rung="first_order", sampling=SAMPLING, seed=0, design=ratios)
+    assert d[0].key != a[0].key
     rec = {"key": a[0].key, "status": DONE}
     assert results.reusable(rec, a[0]) and not results.reusable(rec, b[0])
     assert not results.reusable({"key": a[0].key, "status": FAILED}, a[0])

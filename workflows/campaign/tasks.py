@@ -29,10 +29,14 @@ KINDS = ("sbc", "recovery", "datasets")
 
 SBC_DESIGN: dict[str, Any] = {
     "scene": "paper", "n_protocols": 4, "amplitudes_m": [8e-9, 40e-9, 4],
+    "amplitude_ratios": False,
 }
 """The fixed design of an SBC campaign: the built-in scene, the protocols, and the drive
 amplitudes (first, last, count: evenly spaced) each protocol is swept at, up and down,
-with a reference Q on every protocol (inference.model.likelihood.design_inputs)."""
+with a reference Q on every protocol (inference.model.likelihood.design_inputs); with
+``amplitude_ratios`` every sweep also reads its amplitude per volt against its
+protocol's reference sweep, the amplitude likelihood ``compare`` fits where the data
+have amplitudes."""
 
 
 @dataclass(frozen=True)
@@ -80,7 +84,8 @@ def sbc_design_inputs(design: dict[str, Any]) -> dict[str, Any]:
 
     first, last, count = design["amplitudes_m"]
     return design_inputs(builtin_scene(design["scene"]), n_protocols=int(design["n_protocols"]),
-                         amplitudes=np.linspace(float(first), float(last), int(count)))
+                         amplitudes=np.linspace(float(first), float(last), int(count)),
+                         amplitude_ratios=bool(design.get("amplitude_ratios", False)))
 
 
 def sbc_tasks(law: str, n: int, *, rung: str, sampling: dict[str, Any], seed: int,

@@ -75,7 +75,8 @@ def _tasks(args: argparse.Namespace) -> tuple[list[Any], dict[str, Any]]:
             comparison_specs([args.law], cfg["rung"], "normal")  # the name and its rung
         except ValueError as exc:
             raise UserError(str(exc)) from None
-        design = dict(t.SBC_DESIGN, n_protocols=args.protocols)
+        design = dict(t.SBC_DESIGN, n_protocols=args.protocols,
+                      amplitude_ratios=args.amplitude_ratios)
         tasks = t.sbc_tasks(args.law, args.n, rung=cfg["rung"], sampling=cfg["sampling"],
                             seed=cfg["seed"], thin=args.thin, design=design)
         return tasks, {"law": args.law, "n": args.n, "rung": cfg["rung"],
@@ -182,6 +183,10 @@ def register(sub) -> None:
     s.add_argument("--protocols", type=int, default=4, help="protocols of the simulated "
                    "design, each swept up and down at 4 drive amplitudes 8-40 nm "
                    "(default: %(default)s)")
+    s.add_argument("--amplitude-ratios", action="store_true", help="every simulated sweep "
+                   "also reads its amplitude per volt against its protocol's reference, "
+                   "the amplitude likelihood compare fits where the data have amplitudes "
+                   "(default: the shift, f0 and Q only)")
     _common(s, "beadrod-campaign-sbc")
     r = kinds.add_parser("recovery", help="which law the comparison prefers, over a grid of "
                          "synthetic worlds", description="One comparison per world and seed "
