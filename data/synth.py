@@ -420,7 +420,7 @@ def generate(
     replace entries of :func:`world_parameters` (recorded in the truth)."""
     if world not in WORLDS:
         raise ValueError(f"unknown world {world!r}; known: {', '.join(WORLDS)}")
-    overrides = _checked(world, dict(overrides or {}))
+    overrides = check_overrides(world, overrides or {})
     if world == "hysteretic":
         from beadrod.data.worlds_loss import hysteretic
 

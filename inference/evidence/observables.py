@@ -30,6 +30,7 @@ import numpy as np
 
 from beadrod.inference.evidence.ranking import one_data_hash
 from beadrod.inference.model.likelihood import OBSERVED_SITES
+from beadrod.inference.sampling.diagnostics import relative_efficiency
 
 __all__ = ["OBSERVABLE_NAMES", "RESOLVED_SE", "K_GOOD", "site_loos", "site_contest",
            "preference_by_observable"]
@@ -50,12 +51,15 @@ def site_loos(idata: az.InferenceData) -> dict[str, Any]:
     point-wise log-likelihood of."""
     ll = getattr(idata, "log_likelihood", None)
     out = {}
+    reff = None  # one relative efficiency for every site: it depends on the posterior alone
     for site in OBSERVED_SITES:
         if ll is None or site not in ll:
             continue
+        if reff is None:
+            reff = relative_efficiency(idata)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            out[site] = az.loo(idata, var_name=site, pointwise=True)
+            out[site] = az.loo(idata, var_name=site, pointwise=True, reff=reff)
     return out
 
 

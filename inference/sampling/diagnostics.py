@@ -20,7 +20,8 @@ import numpy as np
 
 from beadrod.inference.sampling import mcmc_stats
 
-__all__ = ["Verdict", "check", "gate_ess", "ess_minima", "loo_report", "DiagnosticsFailed"]
+__all__ = ["Verdict", "check", "gate_ess", "ess_minima", "loo_report", "relative_efficiency",
+           "DiagnosticsFailed"]
 
 log = logging.getLogger("beadrod.inference")
 
@@ -148,18 +149,33 @@ def check(idata: az.InferenceData, *, rhat_max: float = 1.01, ess_min: float = 4
     return verdict
 
 
-def loo_report(idata: az.InferenceData, var_name: str | None = None) -> dict[str, Any]:
+def relative_efficiency(idata: az.InferenceData) -> float:
+    """PSIS's relative efficiency r_eff, as ``az.loo`` computes it when not given one: the
+    mean ESS ("mean" method) over every posterior variable, per draw; 1 for one chain.
+    It depends on the posterior alone, so one value serves every observed site's LOO
+    (computing it is most of a LOO's cost: the ESS of every deterministic element)."""
+    post = idata.posterior
+    n = post.sizes["chain"] * post.sizes["draw"]
+    if post.sizes["chain"] == 1:
+        return 1.0
+    ess = az.ess(post, method="mean")
+    return float(np.hstack([np.ravel(ess[v].values) for v in ess.data_vars]).mean() / n)
+
+
+def loo_report(idata: az.InferenceData, var_name: str | None = None,
+               reff: float | None = None) -> dict[str, Any]:
     """PSIS-LOO with Pareto-k counts (k <= 0.7 good, 0.7-1 bad, > 1 very bad).
 
     With several observed sites, ``var_name`` picks one (arviz needs a single
     pointwise log-likelihood); default: the drive sweeps ('shift_obs') if present.
+    ``reff``: :func:`relative_efficiency` of ``idata``, when the caller has it already.
     """
     ll = idata.log_likelihood
     if var_name is None:
         var_name = "shift_obs" if "shift_obs" in ll else next(iter(ll.data_vars))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        loo = az.loo(idata, var_name=var_name, pointwise=True)
+        loo = az.loo(idata, var_name=var_name, pointwise=True, reff=reff)
     k = np.asarray(loo.pareto_k)
     return {
         "var_name": var_name,
